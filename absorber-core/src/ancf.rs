@@ -1,0 +1,338 @@
+//! Planar ANCF cable element (gradient deficient), paper eqs. 1–17.
+//!
+//! Nodal coordinates per node: `[r₁, r₂, ∂r₁/∂x, ∂r₂/∂x]`; element vector `e = [node i; node j]`.
+//! Position `r(x) = S(ξ) e` with the Hermite cubics of eq. 5, `ξ = x / l`.
+//!
+//! **Displacement form.** Every function here takes the element's *displacement* from the
+//! straight reference configuration, `u = e − e_ref` with `e_ref = [x_i, 0, 1, 0, x_j, 0, 1, 0]`.
+//! Mass, bending and gravity terms are linear, and `K_b e_ref = 0` (the reference is straight),
+//! so they read the same in `u`. The axial Green strain `ε = ½(r′ᵀr′ − 1)` (eq. 11) is evaluated
+//! as `ε = d₁ + ½(d₁² + d₂²)` with `d = S_x u = r′ − (1, 0)`, which is exact and never
+//! subtracts 1 from a number close to 1 (in `f32` that subtraction alone would lose the strain).
+//!
+//! This module is the single source of truth for the element integrals: the embedded model
+//! (`absorber-core`) and the full solver (`host-sim`) both call it.
+
+use crate::scalar::{lit, Real};
+use nalgebra::{SMatrix, SVector, Vector2};
+
+/// 8×8 element matrix.
+pub type ElementMatrix<T> = SMatrix<T, 8, 8>;
+/// 8-vector of element coordinates or forces.
+pub type ElementVector<T> = SVector<T, 8>;
+
+/// 5-point Gauss–Legendre rule on `[0, 1]`: exact to degree 9. The axial force and tangent
+/// integrands are of degree 8 in ξ (ε is of degree 4, `S_xᵀ r′` of degree 4), so the rule
+/// integrates them exactly.
+const GAUSS5: [(f64, f64); 5] = [
+    (0.046_910_077_030_668_004, 0.118_463_442_528_094_54),
+    (0.230_765_344_947_158_45, 0.239_314_335_249_683_23),
+    (0.5, 0.284_444_444_444_444_45),
+    (0.769_234_655_052_841_5, 0.239_314_335_249_683_23),
+    (0.953_089_922_969_332, 0.118_463_442_528_094_54),
+];
+
+/// One uniform ANCF cable element: length and section properties, SI units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Element<T> {
+    /// Element length l \[m\].
+    pub length: T,
+    /// Axial rigidity E·a \[N\].
+    pub axial_rigidity: T,
+    /// Bending rigidity E·I \[N·m²\].
+    pub bending_rigidity: T,
+    /// Mass per unit length ρ·a \[kg/m\].
+    pub mass_per_length: T,
+}
+
+/// Hermite shape functions `[s1, s2, s3, s4]` at ξ (eq. 5).
+#[inline]
+pub fn shape<T: Real>(l: T, xi: T) -> [T; 4] {
+    let (one, two, three) = (T::one(), lit::<T>(2.0), lit::<T>(3.0));
+    let xi2 = xi * xi;
+    let xi3 = xi2 * xi;
+    [
+        one - three * xi2 + two * xi3,
+        l * (xi - two * xi2 + xi3),
+        three * xi2 - two * xi3,
+        l * (xi3 - xi2),
+    ]
+}
+
+/// First x-derivatives `∂s_k/∂x` at ξ \[1/m for s1, s3; 1 for s2, s4\].
+#[inline]
+pub fn shape_x<T: Real>(l: T, xi: T) -> [T; 4] {
+    let six = lit::<T>(6.0);
+    let xi2 = xi * xi;
+    [
+        (six * xi2 - six * xi) / l,
+        T::one() - lit::<T>(4.0) * xi + lit::<T>(3.0) * xi2,
+        (six * xi - six * xi2) / l,
+        lit::<T>(3.0) * xi2 - lit::<T>(2.0) * xi,
+    ]
+}
+
+/// Second x-derivatives `∂²s_k/∂x²` at ξ.
+#[inline]
+pub fn shape_xx<T: Real>(l: T, xi: T) -> [T; 4] {
+    let (six, twelve) = (lit::<T>(6.0), lit::<T>(12.0));
+    [
+        (twelve * xi - six) / (l * l),
+        (six * xi - lit::<T>(4.0)) / l,
+        (six - twelve * xi) / (l * l),
+        (six * xi - lit::<T>(2.0)) / l,
+    ]
+}
+
+/// `Σ_k w_k · (u_{2k}, u_{2k+1})`: applies a scalar shape row to the element vector.
+#[inline]
+fn apply<T: Real>(w: &[T; 4], u: &ElementVector<T>) -> Vector2<T> {
+    let mut r = Vector2::zeros();
+    for (k, wk) in w.iter().enumerate() {
+        r += u.fixed_rows::<2>(2 * k) * *wk;
+    }
+    r
+}
+
+/// Expands a 4×4 scalar matrix `a` into the 8×8 `a ⊗ I₂` (both directions share the shape).
+fn kron_i2<T: Real>(a: &SMatrix<T, 4, 4>) -> ElementMatrix<T> {
+    let mut m = ElementMatrix::zeros();
+    for i in 0..4 {
+        for j in 0..4 {
+            m[(2 * i, 2 * j)] = a[(i, j)];
+            m[(2 * i + 1, 2 * j + 1)] = a[(i, j)];
+        }
+    }
+    m
+}
+
+impl<T: Real> Element<T> {
+    /// Element mass `ρ a l` \[kg\].
+    pub fn mass(&self) -> T {
+        self.mass_per_length * self.length
+    }
+
+    /// Consistent mass matrix `M = ∫ ρ Sᵀ S dV` (eq. 8), closed form `ρ a l / 420 · [...] ⊗ I₂`.
+    pub fn mass_matrix(&self) -> ElementMatrix<T> {
+        let l = self.length;
+        let c = self.mass_per_length * l / lit::<T>(420.0);
+        let f = |x: f64| lit::<T>(x);
+        let a = SMatrix::<T, 4, 4>::new(
+            f(156.0),
+            f(22.0) * l,
+            f(54.0),
+            f(-13.0) * l,
+            f(22.0) * l,
+            f(4.0) * l * l,
+            f(13.0) * l,
+            f(-3.0) * l * l,
+            f(54.0),
+            f(13.0) * l,
+            f(156.0),
+            f(-22.0) * l,
+            f(-13.0) * l,
+            f(-3.0) * l * l,
+            f(-22.0) * l,
+            f(4.0) * l * l,
+        ) * c;
+        kron_i2(&a)
+    }
+
+    /// Constant bending stiffness `K_t = ∫ EI S″ᵀ S″ dx` (eq. 13 with κ = |r″|, eq. 11),
+    /// closed form `EI / l³ · [...] ⊗ I₂`.
+    pub fn bending_stiffness(&self) -> ElementMatrix<T> {
+        let l = self.length;
+        let c = self.bending_rigidity / (l * l * l);
+        let f = |x: f64| lit::<T>(x);
+        let a = SMatrix::<T, 4, 4>::new(
+            f(12.0),
+            f(6.0) * l,
+            f(-12.0),
+            f(6.0) * l,
+            f(6.0) * l,
+            f(4.0) * l * l,
+            f(-6.0) * l,
+            f(2.0) * l * l,
+            f(-12.0),
+            f(-6.0) * l,
+            f(12.0),
+            f(-6.0) * l,
+            f(6.0) * l,
+            f(2.0) * l * l,
+            f(-6.0) * l,
+            f(4.0) * l * l,
+        ) * c;
+        kron_i2(&a)
+    }
+
+    /// Generalized weight of the element for a downward field `g_eff` \[m/s²\] (eqs. 16–17):
+    /// `Q_f = −g_eff ρ a l [0, ½, 0, l/12, 0, ½, 0, −l/12]ᵀ`.
+    pub fn gravity_force(&self, g_eff: T) -> ElementVector<T> {
+        let l = self.length;
+        let w = self.mass() * g_eff;
+        let half = lit::<T>(0.5);
+        let twelfth = l / lit::<T>(12.0);
+        let mut q = ElementVector::zeros();
+        q[1] = -w * half;
+        q[3] = -w * twelfth;
+        q[5] = -w * half;
+        q[7] = w * twelfth;
+        q
+    }
+
+    /// Axial Green strain at ξ from the displacement `u` (eq. 11, cancellation free).
+    pub fn axial_strain(&self, u: &ElementVector<T>, xi: T) -> T {
+        let d = apply(&shape_x(self.length, xi), u);
+        d.x + lit::<T>(0.5) * d.norm_squared()
+    }
+
+    /// Curvature vector `r″ = S_xx u` at ξ \[1/m\] (the paper's κ = |r″|).
+    pub fn curvature_vector(&self, u: &ElementVector<T>, xi: T) -> Vector2<T> {
+        apply(&shape_xx(self.length, xi), u)
+    }
+
+    /// Axial elastic force `Q_l = ∫ EA ε S_xᵀ r′ dx` (eqs. 12–13) and its exact tangent
+    /// `K_l = ∫ EA [(S_xᵀ r′)(S_xᵀ r′)ᵀ + ε S_xᵀ S_x] dx`, by 5-point Gauss (exact).
+    pub fn axial_force_and_tangent(&self, u: &ElementVector<T>) -> (ElementVector<T>, ElementMatrix<T>) {
+        let l = self.length;
+        let mut force = ElementVector::zeros();
+        let mut tangent = ElementMatrix::zeros();
+        for (xi, w) in GAUSS5 {
+            let sx = shape_x(l, lit::<T>(xi));
+            let d = apply(&sx, u);
+            let eps = d.x + lit::<T>(0.5) * d.norm_squared();
+            let r1 = T::one() + d.x; // r′ = (1 + d₁, d₂)
+            let r2 = d.y;
+            // g = S_xᵀ r′ (8-vector).
+            let mut g = ElementVector::zeros();
+            for (k, s) in sx.iter().enumerate() {
+                g[2 * k] = *s * r1;
+                g[2 * k + 1] = *s * r2;
+            }
+            let c = self.axial_rigidity * l * lit::<T>(w);
+            force += g * (c * eps);
+            tangent += g * g.transpose() * c;
+            for i in 0..4 {
+                for j in 0..4 {
+                    let v = c * eps * sx[i] * sx[j];
+                    tangent[(2 * i, 2 * j)] += v;
+                    tangent[(2 * i + 1, 2 * j + 1)] += v;
+                }
+            }
+        }
+        (force, tangent)
+    }
+
+    /// Axial strain energy `½ ∫ EA ε² dx` \[J\] (5-point Gauss: exact for the degree-8 integrand).
+    pub fn axial_energy(&self, u: &ElementVector<T>) -> T {
+        let mut e = T::zero();
+        for (xi, w) in GAUSS5 {
+            let eps = self.axial_strain(u, lit::<T>(xi));
+            e += lit::<T>(0.5 * w) * self.axial_rigidity * self.length * eps * eps;
+        }
+        e
+    }
+
+    /// Bending strain energy `½ uᵀ K_t u` \[J\].
+    pub fn bending_energy(&self, u: &ElementVector<T>) -> T {
+        lit::<T>(0.5) * u.dot(&(self.bending_stiffness() * u))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn el() -> Element<f64> {
+        Element { length: 0.2, axial_rigidity: 8.12e6, bending_rigidity: 1.694, mass_per_length: 0.3178 }
+    }
+
+    /// The closed-form matrices equal their defining integrals (Gauss, exact for these degrees).
+    #[test]
+    fn closed_form_mass_and_bending_equal_quadrature() {
+        let e = el();
+        let (l, mut m, mut k) = (e.length, ElementMatrix::<f64>::zeros(), ElementMatrix::<f64>::zeros());
+        for (xi, w) in GAUSS5 {
+            let s = shape(l, xi);
+            let sxx = shape_xx(l, xi);
+            for i in 0..4 {
+                for j in 0..4 {
+                    m[(2 * i, 2 * j)] += e.mass_per_length * l * w * s[i] * s[j];
+                    k[(2 * i, 2 * j)] += e.bending_rigidity * l * w * sxx[i] * sxx[j];
+                }
+            }
+        }
+        let mc = e.mass_matrix();
+        let kc = e.bending_stiffness();
+        for i in 0..4 {
+            for j in 0..4 {
+                assert!((mc[(2 * i, 2 * j)] - m[(2 * i, 2 * j)]).abs() < 1e-15);
+                assert!((kc[(2 * i, 2 * j)] - k[(2 * i, 2 * j)]).abs() < 1e-9 * kc.amax());
+            }
+        }
+    }
+
+    /// The tangent is the derivative of the force: central differences agree to 1e-7 relative.
+    #[test]
+    fn axial_tangent_is_derivative_of_force() {
+        let e = el();
+        let u = ElementVector::from_column_slice(&[0.0, 0.0, 0.01, -0.05, 1e-4, -0.02, -0.003, -0.1]);
+        let (_, k) = e.axial_force_and_tangent(&u);
+        for j in 0..8 {
+            let h = 1e-6;
+            let mut up = u;
+            up[j] += h;
+            let mut um = u;
+            um[j] -= h;
+            let fd = (e.axial_force_and_tangent(&up).0 - e.axial_force_and_tangent(&um).0) / (2.0 * h);
+            for i in 0..8 {
+                assert!((fd[i] - k[(i, j)]).abs() < 1e-6 * k.amax(), "({i},{j}) {} vs {}", fd[i], k[(i, j)]);
+            }
+        }
+    }
+
+    /// The force is the gradient of the energy.
+    #[test]
+    fn axial_force_is_gradient_of_energy() {
+        let e = el();
+        let u = ElementVector::from_column_slice(&[0.0, 1e-3, 0.01, -0.05, 1e-4, -0.02, -0.003, -0.1]);
+        let (f, _) = e.axial_force_and_tangent(&u);
+        for j in 0..8 {
+            let h = 1e-7;
+            let mut up = u;
+            up[j] += h;
+            let mut um = u;
+            um[j] -= h;
+            let fd = (e.axial_energy(&up) - e.axial_energy(&um)) / (2.0 * h);
+            assert!((fd - f[j]).abs() < 1e-6 * f.amax().max(1.0));
+        }
+    }
+
+    /// A rigid rotation of the reference by angle a has zero strain (ANCF describes rigid
+    /// motion exactly), and in f32 the strain of a tiny stretch is kept (no cancellation).
+    #[test]
+    fn rigid_rotation_is_strain_free_and_f32_keeps_small_strain() {
+        let e = el();
+        let a: f64 = 0.3;
+        let (c, s) = (a.cos(), a.sin());
+        let l = e.length;
+        // node i at origin, node j at l; rotated: r = (c x, s x), r′ = (c, s).
+        let u = ElementVector::from_column_slice(&[0.0, 0.0, c - 1.0, s, l * c - l, l * s, c - 1.0, s]);
+        for xi in [0.0, 0.3, 1.0] {
+            assert!(e.axial_strain(&u, xi).abs() < 1e-15);
+        }
+        let ef = Element::<f32> { length: 0.2, axial_rigidity: 8.12e6, bending_rigidity: 1.694, mass_per_length: 0.3178 };
+        let stretch = 1e-7f32; // uniform strain 1e-7
+        let u = SVector::<f32, 8>::from_column_slice(&[0.0, 0.0, stretch, 0.0, 0.2 * stretch, 0.0, stretch, 0.0]);
+        let eps = ef.axial_strain(&u, 0.5);
+        assert!((eps - 1e-7).abs() < 1e-12, "{eps}");
+    }
+
+    /// Gravity: the total vertical load equals the element weight.
+    #[test]
+    fn gravity_sums_to_weight() {
+        let e = el();
+        let q = e.gravity_force(9.81);
+        assert!((q[1] + q[5] + e.mass() * 9.81).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,138 @@
+//! Energies as in the paper's figures 17–19 and 26–30 (MODEL-DERIVATION §7).
+//!
+//! Kinetic energies use absolute velocities (relative velocity + base velocity ẏ_b along y);
+//! potentials are gravitational energies as changes from the static equilibrium, plus the
+//! base displacement y_b. Pass `base_velocity = base_displacement = 0` for the energies in the
+//! frame moving with the base. The beam strain energy is the total (static part included).
+
+use crate::ancf::ElementVector;
+use crate::beam::gather;
+use crate::model::{Model, State};
+use crate::scalar::{lit, Real};
+use crate::scene::{BallKind, Scene};
+use crate::tip;
+
+/// Energies of the bodies \[J\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Energies<T> {
+    /// Beam strain energy (axial + bending), total.
+    pub beam_strain: T,
+    /// Beam kinetic energy.
+    pub beam_kinetic: T,
+    /// Beam gravitational energy, change from the static state.
+    pub beam_potential: T,
+    /// Tip mass kinetic energy.
+    pub tip_kinetic: T,
+    /// Tip mass gravitational energy, change from the static state.
+    pub tip_potential: T,
+    /// Ball kinetic energy (translation + spin).
+    pub ball_kinetic: T,
+    /// Ball gravitational energy, change from the static state.
+    pub ball_potential: T,
+}
+
+impl<T: Real> Energies<T> {
+    /// Sum of all terms.
+    pub fn total(&self) -> T {
+        self.beam_strain
+            + self.beam_kinetic
+            + self.beam_potential
+            + self.tip_kinetic
+            + self.tip_potential
+            + self.ball_kinetic
+            + self.ball_potential
+    }
+}
+
+/// Heights (relative to the base) of the mass centres: (∫μ y dx, y_B tip, y_D ball).
+struct Heights<T> {
+    beam: T,
+    tip: T,
+    ball: T,
+}
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
+    fn heights(&self, s: &State<T, D>) -> Heights<T> {
+        let mut beam = T::zero();
+        let unit = self.beam.element.gravity_force(T::one());
+        for k in 0..N {
+            // ∫ μ y dx = −Q_f(g = 1) · u (eq. 17).
+            beam -= unit.dot(&gather(&s.q, k));
+        }
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, _) = tip::psi_and_rate(&x);
+        let y_a = x.q[1];
+        let tip = y_a - self.params.tip.offset * psi.cos();
+        let theta = self.ball_angle_of(s);
+        let ball = y_a - self.params.ball.path_radius() * theta.cos();
+        Heights { beam, tip, ball }
+    }
+
+    fn ball_angle_of(&self, s: &State<T, D>) -> T {
+        let x = Self::local(&s.q, &s.v, &s.a);
+        match S::BALL {
+            BallKind::Free => x.q[4],
+            _ => tip::psi_and_rate(&x).0,
+        }
+    }
+
+    /// Energies of the current state, for the base moving at `base_velocity` \[m/s\] and
+    /// displaced by `base_displacement` \[m\].
+    pub fn energies(&self, base_velocity: T, base_displacement: T) -> Energies<T> {
+        let s = &self.state;
+        let g = self.params.gravity;
+        let half = lit::<T>(0.5);
+        let z = T::zero();
+        let mut e = Energies {
+            beam_strain: z,
+            beam_kinetic: z,
+            beam_potential: z,
+            tip_kinetic: z,
+            tip_potential: z,
+            ball_kinetic: z,
+            ball_potential: z,
+        };
+        for k in 0..N {
+            let u = gather(&s.q, k);
+            e.beam_strain += self.beam.element.axial_energy(&u) + self.beam.element.bending_energy(&u);
+            let mut v = gather(&s.v, k);
+            v[1] += base_velocity;
+            v[5] += base_velocity;
+            e.beam_kinetic += half * v.dot(&(self.beam.mass * v));
+        }
+        let now = self.heights(s);
+        let eq_state = State { q: self.equilibrium, ..*s };
+        let eq = self.heights(&eq_state);
+        e.beam_potential = g * (now.beam - eq.beam + self.params.beam.mass * base_displacement);
+        if S::HAS_TIP {
+            let x = Self::local(&s.q, &s.v, &s.a);
+            let (psi, rate) = tip::psi_and_rate(&x);
+            let (xd, yd) = (x.v[0], x.v[1] + base_velocity);
+            let p = &self.params.tip;
+            let (vx, vy) = (xd + p.offset * rate * psi.cos(), yd + p.offset * rate * psi.sin());
+            e.tip_kinetic = half * (p.mass * (vx * vx + vy * vy) + p.inertia * rate * rate);
+            e.tip_potential = g * p.mass * (now.tip - eq.tip + base_displacement);
+            if !matches!(S::BALL, BallKind::None) {
+                let b = &self.params.ball;
+                let rho = b.path_radius();
+                let theta = self.ball_angle_of(s);
+                let theta_rate = if matches!(S::BALL, BallKind::Free) { x.v[4] } else { rate };
+                let (vx, vy) = (xd + rho * theta_rate * theta.cos(), yd + rho * theta_rate * theta.sin());
+                let spin = ((rho + b.radius) * rate - rho * theta_rate) / b.radius;
+                e.ball_kinetic = half * (b.mass * (vx * vx + vy * vy) + b.inertia * spin * spin);
+                e.ball_potential = g * b.mass * (now.ball - eq.ball + base_displacement);
+            }
+        }
+        e
+    }
+
+    /// Beam strain energy of an arbitrary displacement vector (for tests and reports) \[J\].
+    pub fn strain_energy_of(&self, q: &nalgebra::SVector<T, D>) -> T {
+        let mut u_total = T::zero();
+        for k in 0..N {
+            let u: ElementVector<T> = gather(q, k);
+            u_total += self.beam.element.axial_energy(&u) + self.beam.element.bending_energy(&u);
+        }
+        u_total
+    }
+}

@@ -1,0 +1,46 @@
+//! Errors as values: nothing in this crate panics on a user's input.
+
+use core::fmt;
+
+/// What went wrong. Every fallible call of the crate returns this.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Error {
+    /// A parameter is out of range; `field` names it as in [`crate::Params`].
+    InvalidParameter {
+        /// Dotted path of the field, e.g. `"beam.modulus"`.
+        field: &'static str,
+        /// Why it was rejected.
+        reason: &'static str,
+    },
+    /// The step input (base acceleration) is NaN or infinite. The state is unchanged.
+    NonFiniteInput,
+    /// Newton did not reach the tolerance within the iteration budget. The state is unchanged.
+    NoConvergence {
+        /// Iterations done (= the budget).
+        iterations: u32,
+        /// Last scaled position increment (dimensionless, see [`crate::Integrator::tolerance`]).
+        increment: f64,
+    },
+    /// A value became NaN or infinite during the step (divergence). The state is unchanged.
+    NonFiniteState,
+    /// A linear system was singular (e.g. a zero mass). The state is unchanged.
+    Singular,
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::InvalidParameter { field, reason } => write!(f, "invalid parameter `{field}`: {reason}"),
+            Error::NonFiniteInput => write!(f, "base acceleration is not finite; state kept"),
+            Error::NoConvergence { iterations, increment } => write!(
+                f,
+                "Newton did not converge in {iterations} iterations (last increment {increment:.3e}); state kept"
+            ),
+            Error::NonFiniteState => write!(f, "state became non-finite (divergence); state kept"),
+            Error::Singular => write!(f, "singular system matrix; state kept"),
+        }
+    }
+}
+
+impl core::error::Error for Error {}

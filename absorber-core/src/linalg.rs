@@ -1,0 +1,69 @@
+//! Dense LU with partial pivoting for the Newton systems (`D` ≤ a few dozen).
+//!
+//! nalgebra's `lu()` needs typenum bounds that a generic `const D` cannot satisfy; this one is
+//! generic, allocation-free, and has no panic path: loop bounds are the compile-time `D`.
+
+use crate::scalar::Real;
+use nalgebra::{SMatrix, SVector};
+
+/// Solves `A x = b` by Gaussian elimination with partial pivoting; `None` if `A` is singular
+/// (a zero pivot) or a value is not finite.
+pub fn solve<T: Real, const D: usize>(mut a: SMatrix<T, D, D>, mut b: SVector<T, D>) -> Option<SVector<T, D>> {
+    for k in 0..D {
+        // Pivot: largest |a[i,k]| for i ≥ k.
+        let mut p = k;
+        let mut best = a[(k, k)].abs();
+        for i in (k + 1)..D {
+            let v = a[(i, k)].abs();
+            if v > best {
+                best = v;
+                p = i;
+            }
+        }
+        if !(best > T::zero()) || !best.is_finite() {
+            return None;
+        }
+        if p != k {
+            a.swap_rows(p, k);
+            b.swap_rows(p, k);
+        }
+        let inv = T::one() / a[(k, k)];
+        for i in (k + 1)..D {
+            let f = a[(i, k)] * inv;
+            if f != T::zero() {
+                for j in (k + 1)..D {
+                    let akj = a[(k, j)];
+                    a[(i, j)] -= f * akj;
+                }
+                let bk = b[k];
+                b[i] -= f * bk;
+            }
+        }
+    }
+    for k in (0..D).rev() {
+        let mut s = b[k];
+        for j in (k + 1)..D {
+            s -= a[(k, j)] * b[j];
+        }
+        b[k] = s / a[(k, k)];
+    }
+    if b.iter().all(|x| x.is_finite()) {
+        Some(b)
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solves_a_system_that_needs_pivoting() {
+        let a = SMatrix::<f64, 3, 3>::new(0.0, 2.0, 1.0, 1.0, 1.0, 0.0, 4.0, -1.0, 3.0);
+        let x = SVector::<f64, 3>::new(1.0, -2.0, 0.5);
+        let got = solve(a, a * x).expect("regular");
+        assert!((got - x).amax() < 1e-14);
+        assert!(solve(SMatrix::<f64, 2, 2>::new(1.0, 2.0, 2.0, 4.0), SVector::<f64, 2>::new(1.0, 1.0)).is_none());
+    }
+}

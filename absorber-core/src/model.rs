@@ -1,0 +1,574 @@
+//! The model: state, assembly of the equations of motion, Newton solves and the fixed step.
+
+use crate::ancf::Element;
+use crate::beam::Beam;
+use crate::error::Error;
+use crate::linalg;
+use crate::params::Params;
+use crate::scalar::{lit, to_f64, Real};
+use crate::scene::{BallKind, Scene};
+use crate::tip::{self, BallMode, Chain, LocalState, TipInertia, LOCAL};
+use core::marker::PhantomData;
+use nalgebra::{SMatrix, SVector};
+
+/// Whether the free ball rests on a stop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Contact {
+    /// Ball off the stops (or no stops / no free ball).
+    Off,
+    /// Ball resting on the stop at `+φ_max` (`Positive`) or `−φ_max` (`Negative`).
+    OnStop(Side),
+}
+
+/// Which stop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    /// Relative angle θ − ψ = +φ_max.
+    Positive,
+    /// Relative angle θ − ψ = −φ_max.
+    Negative,
+}
+
+impl Side {
+    /// +1 or −1.
+    pub fn sign<T: Real>(self) -> T {
+        match self {
+            Side::Positive => T::one(),
+            Side::Negative => -T::one(),
+        }
+    }
+}
+
+/// The full dynamic state: everything needed to continue a run. `D` = number of unknowns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct State<T, const D: usize> {
+    /// Displacements of the free nodal coordinates from the straight reference \[m, -\], then
+    /// the ball angle θ from the downward vertical \[rad\] (free-ball scenes).
+    pub q: SVector<T, D>,
+    /// Velocities relative to the base.
+    pub v: SVector<T, D>,
+    /// Accelerations relative to the base.
+    pub a: SVector<T, D>,
+    /// Time since the start \[s\].
+    pub time: T,
+    /// Base acceleration ÿ_b of the last step (the input at `time`) \[m/s²\].
+    pub base_accel: T,
+    /// Stop contact.
+    pub contact: Contact,
+}
+
+/// A stop impact that happened during a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Impact<T> {
+    /// Time of the impact \[s\].
+    pub time: T,
+    /// Which stop.
+    pub side: Side,
+    /// Relative angular speed θ̇ − ψ̇ before the impact \[rad/s\].
+    pub relative_speed: T,
+    /// Contact impulse on the ball along the track, Λ/ρ \[N·s\].
+    pub impulse: T,
+    /// Kinetic energy dissipated, ½(1−e²)Ġ²/(∇G M⁻¹ ∇Gᵀ) \[J\].
+    pub energy_loss: T,
+    /// The ball stayed on the stop (plastic, compressive contact).
+    pub stuck: bool,
+}
+
+/// What one step did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport<T> {
+    /// Newton iterations used, summed over the sub-solves of the step.
+    pub iterations: u32,
+    /// Largest final scaled position increment of the Newton solves \[-\].
+    pub increment: T,
+    /// Stop impact within the step, if any.
+    pub impact: Option<Impact<T>>,
+}
+
+/// Result of one Newton solve.
+struct Solved<T, const D: usize> {
+    x: SVector<T, D>,
+    iterations: u32,
+    increment: T,
+}
+
+/// The reduced model of scene `S` with `N` elements and `D = 4N + S::EXTRA_DOFS` unknowns.
+#[derive(Clone, Debug)]
+pub struct Model<T, S, const N: usize, const D: usize> {
+    pub(crate) params: Params<T>,
+    pub(crate) beam: Beam<T>,
+    pub(crate) inertia: TipInertia<T>,
+    pub(crate) state: State<T, D>,
+    /// Static equilibrium (zero relative velocity) the run started from.
+    pub(crate) equilibrium: SVector<T, D>,
+    /// Scale of each unknown for the convergence test: beam length for positions, 1 otherwise.
+    pub(crate) scale: SVector<T, D>,
+    _scene: PhantomData<S>,
+}
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
+    const CHECK: () = {
+        assert!(N >= 1, "a beam needs at least one element");
+        assert!(D == 4 * N + S::EXTRA_DOFS, "D must equal 4N + the scene's extra unknowns");
+    };
+
+    /// Builds the model, solves the static equilibrium under gravity by load stepping and starts
+    /// from it at rest relative to the base (ball at `ball.initial_angle`), with the base
+    /// acceleration `base_accel` \[m/s²\] as the input at t = 0.
+    pub fn at_rest(params: Params<T>, base_accel: T) -> Result<Self, Error> {
+        let mut m = Self::new(params)?;
+        m.solve_static()?;
+        m.restart(base_accel)?;
+        Ok(m)
+    }
+
+    /// Builds the model in the undeformed reference configuration, at rest, without solving
+    /// the static equilibrium (see [`Model::at_rest`]).
+    pub fn new(params: Params<T>) -> Result<Self, Error> {
+        #[allow(clippy::let_unit_value)]
+        let () = Self::CHECK;
+        params.validate(S::HAS_TIP, !matches!(S::BALL, BallKind::None))?;
+        let n: T = lit(N as f64);
+        let b = &params.beam;
+        let element = Element {
+            length: b.length / n,
+            axial_rigidity: b.modulus * b.area,
+            bending_rigidity: b.modulus * b.inertia,
+            mass_per_length: b.mass / b.length,
+        };
+        let beam = Beam {
+            element,
+            mass: element.mass_matrix(),
+            stiffness: element.bending_stiffness(),
+            damping: params.damping.stiffness_proportional,
+        };
+        let mut scale = SVector::<T, D>::from_element(T::one());
+        for node in 0..N {
+            for c in 0..2 {
+                if let Some(s) = scale.get_mut(4 * node + c) {
+                    *s = b.length;
+                }
+            }
+        }
+        let z = SVector::<T, D>::zeros();
+        Ok(Self {
+            inertia: TipInertia::new(&params, S::HAS_TIP, S::BALL),
+            params,
+            beam,
+            state: State { q: z, v: z, a: z, time: T::zero(), base_accel: T::zero(), contact: Contact::Off },
+            equilibrium: z,
+            scale,
+            _scene: PhantomData,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &Params<T> {
+        &self.params
+    }
+
+    /// The current state.
+    pub fn state(&self) -> &State<T, D> {
+        &self.state
+    }
+
+    /// The static equilibrium the model started from.
+    pub fn equilibrium(&self) -> &SVector<T, D> {
+        &self.equilibrium
+    }
+
+    /// Index of the end node's first coordinate.
+    const END: usize = 4 * N - 4;
+    /// Index of the ball angle (free ball only).
+    const THETA: usize = 4 * N;
+
+    pub(crate) fn local(q: &SVector<T, D>, v: &SVector<T, D>, a: &SVector<T, D>) -> LocalState<T> {
+        let mut x = LocalState { q: [T::zero(); LOCAL], v: [T::zero(); LOCAL], a: [T::zero(); LOCAL] };
+        let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
+        for k in 0..n {
+            let g = Self::END + k;
+            if let (Some(qq), Some(vv), Some(aa), Some(dq), Some(dv), Some(da)) =
+                (q.get(g), v.get(g), a.get(g), x.q.get_mut(k), x.v.get_mut(k), x.a.get_mut(k))
+            {
+                *dq = *qq;
+                *dv = *vv;
+                *da = *aa;
+            }
+        }
+        x
+    }
+
+    fn ball_mode(contact: Contact, stop: T) -> BallMode<T> {
+        match (S::BALL, contact) {
+            (BallKind::None, _) => BallMode::Absent,
+            (BallKind::Locked, _) => BallMode::Held(T::zero()),
+            (BallKind::Free, Contact::Off) => BallMode::Free,
+            (BallKind::Free, Contact::OnStop(side)) => BallMode::Held(side.sign::<T>() * stop),
+        }
+    }
+
+    /// Residual `r(q, v, a)` of the equations of motion and its Jacobian along the chain `ch`;
+    /// also the generalized contact force on the ball along θ.
+    pub(crate) fn assemble(
+        &self,
+        q: &SVector<T, D>,
+        v: &SVector<T, D>,
+        a: &SVector<T, D>,
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+    ) -> (SVector<T, D>, SMatrix<T, D, D>, T) {
+        let mut r = SVector::<T, D>::zeros();
+        let mut jac = SMatrix::<T, D, D>::zeros();
+        self.beam.assemble(N, q, v, a, g_eff, ch, &mut r, &mut jac);
+        let mut contact_force = T::zero();
+        if S::HAS_TIP {
+            let x = Self::local(q, v, a);
+            let mode = Self::ball_mode(contact, self.params.ball.stop_angle);
+            let (rows, lambda) = tip::residual(&self.inertia, &x, ch, g_eff, mode, S::EXTRA_DOFS == 1);
+            contact_force = lambda;
+            let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
+            for (i, row) in rows.iter().enumerate().take(n) {
+                if let Some(dst) = r.get_mut(Self::END + i) {
+                    *dst += row.re;
+                }
+                for (j, d) in row.du.iter().enumerate().take(n) {
+                    if let Some(dst) = jac.get_mut((Self::END + i, Self::END + j)) {
+                        *dst += *d;
+                    }
+                }
+            }
+        }
+        (r, jac, contact_force)
+    }
+
+    /// Newton–Raphson on `x` with `q = q₀ + c_q x`, `v = v₀ + c_v x`, `a = a₀ + c_m x`, from the
+    /// guess `x`. Convergence: `max_i |c_pos Δx_i| / scale_i ≤ tolerance`.
+    #[allow(clippy::too_many_arguments)]
+    fn newton(
+        &self,
+        q0: &SVector<T, D>,
+        v0: &SVector<T, D>,
+        a0: &SVector<T, D>,
+        mut x: SVector<T, D>,
+        ch: &Chain<T>,
+        c_pos: T,
+        g_eff: T,
+        contact: Contact,
+    ) -> Result<Solved<T, D>, Error> {
+        let max = self.params.integrator.max_iterations;
+        let tol = self.params.integrator.tolerance;
+        let mut increment = T::zero();
+        for it in 1..=max {
+            let q = q0 + x * ch.c_q;
+            let v = v0 + x * ch.c_v;
+            let a = a0 + x * ch.c_m;
+            let (r, jac, _) = self.assemble(&q, &v, &a, g_eff, ch, contact);
+            if !r.iter().all(|z| z.is_finite()) || !jac.iter().all(|z| z.is_finite()) {
+                return Err(Error::NonFiniteState);
+            }
+            let dx = linalg::solve(jac, -r).ok_or(Error::Singular)?;
+            if !dx.iter().all(|z| z.is_finite()) {
+                return Err(Error::Singular);
+            }
+            x += dx;
+            increment = T::zero();
+            for (d, s) in dx.iter().zip(self.scale.iter()) {
+                let e = (*d * c_pos).abs() / *s;
+                if e > increment {
+                    increment = e;
+                }
+            }
+            if increment <= tol {
+                return Ok(Solved { x, iterations: it, increment });
+            }
+        }
+        Err(Error::NoConvergence { iterations: max, increment: to_f64(increment) })
+    }
+
+    /// Static equilibrium under gravity (zero base acceleration) by load stepping in 4 steps.
+    /// Sets the state to it (at rest) and remembers it as the reference of the potentials.
+    pub fn solve_static(&mut self) -> Result<u32, Error> {
+        const LOAD_STEPS: usize = 4;
+        let z = SVector::<T, D>::zeros();
+        let ch = Chain { c_q: T::one(), c_v: T::zero(), c_m: T::zero() };
+        let mut q = z;
+        let mut iterations = 0;
+        for k in 1..=LOAD_STEPS {
+            let g = self.params.gravity * lit::<T>(k as f64) / lit::<T>(LOAD_STEPS as f64);
+            let s = self.newton(&z, &z, &z, q, &ch, T::one(), g, Contact::Off)?;
+            q = s.x;
+            iterations += s.iterations;
+        }
+        self.equilibrium = q;
+        self.state = State { q, v: z, a: z, time: T::zero(), base_accel: T::zero(), contact: Contact::Off };
+        Ok(iterations)
+    }
+
+    /// Restarts the run at time 0 from the static equilibrium, at rest relative to the base, the
+    /// ball at `ball.initial_angle` from the vertical, with input `base_accel` at t = 0; computes
+    /// the consistent initial acceleration.
+    pub fn restart(&mut self, base_accel: T) -> Result<(), Error> {
+        if !base_accel.is_finite() {
+            return Err(Error::NonFiniteInput);
+        }
+        let mut s = State {
+            q: self.equilibrium,
+            v: SVector::zeros(),
+            a: SVector::zeros(),
+            time: T::zero(),
+            base_accel,
+            contact: Contact::Off,
+        };
+        if S::EXTRA_DOFS == 1 {
+            if let Some(th) = s.q.get_mut(Self::THETA) {
+                *th += self.params.ball.initial_angle;
+            }
+        }
+        s.a = self.consistent_acceleration(&s)?.x;
+        self.state = s;
+        Ok(())
+    }
+
+    /// Replaces the state (e.g. restored from storage). The caller vouches for consistency.
+    pub fn set_state(&mut self, state: State<T, D>) {
+        self.state = state;
+    }
+
+    fn effective_gravity(&self, base_accel: T) -> T {
+        self.params.gravity + base_accel
+    }
+
+    /// Solves `r(q, v, a) = 0` for the acceleration at fixed q, v (linear in a: 2 iterations).
+    fn consistent_acceleration(&self, s: &State<T, D>) -> Result<Solved<T, D>, Error> {
+        let ch = Chain { c_q: T::zero(), c_v: T::zero(), c_m: T::one() };
+        let i = &self.params.integrator;
+        let c_pos = i.beta * i.step * i.step;
+        self.newton(&s.q, &s.v, &SVector::zeros(), s.a, &ch, c_pos, self.effective_gravity(s.base_accel), s.contact)
+    }
+
+    /// One Newmark step of length `h` from `s` to the input `base_accel` at its end.
+    fn newmark(&self, s: &State<T, D>, h: T, base_accel: T) -> Result<(State<T, D>, Solved<T, D>), Error> {
+        let i = &self.params.integrator;
+        let half = lit::<T>(0.5);
+        let q_pred = s.q + s.v * h + s.a * (h * h * (half - i.beta));
+        let v_pred = s.v + s.a * (h * (T::one() - i.gamma));
+        let ch = Chain { c_q: i.beta * h * h, c_v: i.gamma * h, c_m: T::one() };
+        let solved = self.newton(
+            &q_pred,
+            &v_pred,
+            &SVector::zeros(),
+            s.a,
+            &ch,
+            ch.c_q,
+            self.effective_gravity(base_accel),
+            s.contact,
+        )?;
+        let a = solved.x;
+        let mut next = State {
+            q: q_pred + a * ch.c_q,
+            v: v_pred + a * ch.c_v,
+            a,
+            time: s.time + h,
+            base_accel,
+            contact: s.contact,
+        };
+        if let Contact::OnStop(side) = next.contact {
+            self.hold_on_stop(&mut next, side);
+        }
+        Ok((next, solved))
+    }
+
+    /// Projects θ, θ̇, θ̈ of a ball resting on a stop onto ψ + side·φ_max.
+    fn hold_on_stop(&self, s: &mut State<T, D>, side: Side) {
+        let (psi, rate, acc) = tip::psi_all(&Self::local(&s.q, &s.v, &s.a));
+        let lock = side.sign::<T>() * self.params.ball.stop_angle;
+        if let (Some(q), Some(v), Some(a)) =
+            (s.q.get_mut(Self::THETA), s.v.get_mut(Self::THETA), s.a.get_mut(Self::THETA))
+        {
+            *q = psi + lock;
+            *v = rate;
+            *a = acc;
+        }
+    }
+
+    /// Relative ball angle α = θ − ψ of a state (0 without a free ball) \[rad\].
+    pub(crate) fn relative_angle(s: &State<T, D>) -> T {
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, _) = tip::psi_and_rate(&x);
+        x.q[4] - psi
+    }
+
+    /// Advances the model by one step `h` to the new input `base_accel` = ÿ_b(t + h) \[m/s²\]
+    /// (the acceleration of the base, measured, positive up).
+    ///
+    /// On error the state is left exactly as it was.
+    pub fn step(&mut self, base_accel: T) -> Result<StepReport<T>, Error> {
+        if !base_accel.is_finite() {
+            return Err(Error::NonFiniteInput);
+        }
+        let h = self.params.integrator.step;
+        let start = self.state;
+        let (mut next, solved) = self.newmark(&start, h, base_accel)?;
+        let mut report = StepReport { iterations: solved.iterations, increment: solved.increment, impact: None };
+
+        if S::STOPS && S::EXTRA_DOFS == 1 {
+            match next.contact {
+                Contact::Off => {
+                    let stop = self.params.ball.stop_angle;
+                    let alpha1 = Self::relative_angle(&next);
+                    if alpha1.abs() > stop {
+                        next = self.step_with_impact(&start, &next, h, base_accel, alpha1, &mut report)?;
+                    }
+                }
+                Contact::OnStop(side) => {
+                    // Release when the stop would have to pull the ball.
+                    let force = self.contact_force(&next);
+                    if side.sign::<T>() * force > T::zero() {
+                        next.contact = Contact::Off;
+                    }
+                }
+            }
+        }
+        if !(next.q.iter().chain(next.v.iter()).chain(next.a.iter()).all(|z| z.is_finite())) {
+            return Err(Error::NonFiniteState);
+        }
+        self.state = next;
+        Ok(report)
+    }
+
+    /// Generalized contact force the stop puts on the ball along θ in a held state.
+    fn contact_force(&self, s: &State<T, D>) -> T {
+        let z = T::zero();
+        let ch = Chain { c_q: z, c_v: z, c_m: z };
+        let (_, _, f) = self.assemble(&s.q, &s.v, &s.a, self.effective_gravity(s.base_accel), &ch, s.contact);
+        f
+    }
+
+    /// Splits a step that crossed a stop: Newmark to the crossing (located by linear
+    /// interpolation of α), impact, consistent acceleration, Newmark to the end of the step.
+    fn step_with_impact(
+        &self,
+        start: &State<T, D>,
+        trial: &State<T, D>,
+        h: T,
+        base_accel: T,
+        alpha1: T,
+        report: &mut StepReport<T>,
+    ) -> Result<State<T, D>, Error> {
+        let stop = self.params.ball.stop_angle;
+        let side = if alpha1 > T::zero() { Side::Positive } else { Side::Negative };
+        let target = side.sign::<T>() * stop;
+        let alpha0 = Self::relative_angle(start);
+        let mut tau = (target - alpha0) / (alpha1 - alpha0);
+        if !tau.is_finite() || tau < T::zero() {
+            tau = T::zero();
+        }
+        if tau > T::one() {
+            tau = T::one();
+        }
+        let h1 = tau * h;
+        let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
+        let mut mid = if h1 > h * lit(1e-6) {
+            let (m, s) = self.newmark(start, h1, accel_mid)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            m
+        } else {
+            *start
+        };
+        let _ = trial;
+        let impact = self.impact(&mut mid, side)?;
+        let acc = self.consistent_acceleration(&mid)?;
+        report.iterations += acc.iterations;
+        mid.a = acc.x;
+        let rest = h - h1;
+        let mut end = if rest > h * lit(1e-6) {
+            let (e, s) = self.newmark(&mid, rest, base_accel)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            e
+        } else {
+            mid
+        };
+        // A second crossing within the same (remaining) step: the ball came straight back
+        // onto the stop; end the step with it resting there (plastic).
+        if end.contact == Contact::Off && Self::relative_angle(&end).abs() > stop {
+            let side2 = if Self::relative_angle(&end) > T::zero() { Side::Positive } else { Side::Negative };
+            self.hold_on_stop(&mut end, side2);
+            end.contact = Contact::OnStop(side2);
+            let acc = self.consistent_acceleration(&end)?;
+            end.a = acc.x;
+            if side2.sign::<T>() * self.contact_force(&end) > T::zero() {
+                end.contact = Contact::Off;
+            }
+        }
+        report.impact = Some(impact);
+        Ok(end)
+    }
+
+    /// The mass matrix M(q) of a state.
+    pub(crate) fn mass_matrix(&self, s: &State<T, D>, contact: Contact) -> SMatrix<T, D, D> {
+        let z = T::zero();
+        let ch = Chain { c_q: z, c_v: z, c_m: T::one() };
+        self.assemble(&s.q, &s.v, &s.a, self.effective_gravity(s.base_accel), &ch, contact).1
+    }
+
+    /// Stop impact (MODEL.md, MODEL-DERIVATION §6): projects the ball onto the stop, applies the
+    /// generalized impulse `Λ = −(1+e) Ġ⁻ / (∇G M⁻¹ ∇Gᵀ)` along `∇G = ∂(θ − ψ)/∂q`,
+    /// `q̇⁺ = q̇⁻ + M⁻¹ ∇Gᵀ Λ`, and decides whether the ball stays on the stop.
+    pub(crate) fn impact(&self, s: &mut State<T, D>, side: Side) -> Result<Impact<T>, Error> {
+        let ball = &self.params.ball;
+        let lock = side.sign::<T>() * ball.stop_angle;
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, _) = tip::psi_and_rate(&x);
+        if let Some(th) = s.q.get_mut(Self::THETA) {
+            *th = psi + lock;
+        }
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let grad_local = tip::gap_gradient(&x);
+        let mut grad = SVector::<T, D>::zeros();
+        for (k, gk) in grad_local.iter().enumerate() {
+            if let Some(g) = grad.get_mut(Self::END + k) {
+                *g = *gk;
+            }
+        }
+        let speed = grad.dot(&s.v);
+        let mut impact = Impact {
+            time: s.time,
+            side,
+            relative_speed: speed,
+            impulse: T::zero(),
+            energy_loss: T::zero(),
+            stuck: false,
+        };
+        let plastic = speed.abs() < ball.stick_speed;
+        if side.sign::<T>() * speed > T::zero() {
+            let e = if plastic { T::zero() } else { ball.restitution };
+            let m = self.mass_matrix(s, Contact::Off);
+            let y = linalg::solve(m, grad).ok_or(Error::Singular)?;
+            let w = grad.dot(&y);
+            if !(w > T::zero()) {
+                return Err(Error::Singular);
+            }
+            let lambda = -(T::one() + e) * speed / w;
+            s.v += y * lambda;
+            impact.impulse = lambda / ball.path_radius();
+            impact.energy_loss = lit::<T>(0.5) * (T::one() - e * e) * speed * speed / w;
+        }
+        s.contact = Contact::Off;
+        if plastic {
+            // Stay on the stop if the contact force is compressive.
+            let mut held = *s;
+            held.contact = Contact::OnStop(side);
+            self.hold_on_stop(&mut held, side);
+            let acc = self.consistent_acceleration(&held)?;
+            held.a = acc.x;
+            if side.sign::<T>() * self.contact_force(&held) <= T::zero() {
+                *s = held;
+                impact.stuck = true;
+            }
+        }
+        Ok(impact)
+    }
+}

@@ -1,0 +1,58 @@
+//! What firmware reads back after a step.
+
+use crate::model::Model;
+use crate::scalar::Real;
+use crate::scene::{BallKind, Scene};
+use crate::tip;
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
+    /// Vertical deflection of the beam end A relative to the base (includes the static sag) \[m\].
+    pub fn tip_deflection(&self) -> T {
+        self.state.q.get(4 * N - 3).copied().unwrap_or(T::zero())
+    }
+
+    /// Vertical velocity of the beam end relative to the base \[m/s\].
+    pub fn tip_velocity(&self) -> T {
+        self.state.v.get(4 * N - 3).copied().unwrap_or(T::zero())
+    }
+
+    /// Horizontal displacement of the beam end from its unloaded position \[m\].
+    pub fn tip_axial_displacement(&self) -> T {
+        self.state.q.get(4 * N - 4).copied().unwrap_or(T::zero())
+    }
+
+    /// Tip rotation ψ (angle of the end slope) \[rad\] and its rate \[rad/s\].
+    pub fn tip_angle(&self) -> (T, T) {
+        tip::psi_and_rate(&Self::local(&self.state.q, &self.state.v, &self.state.a))
+    }
+
+    /// Ball angle θ from the downward vertical \[rad\] and its rate \[rad/s\]; `None` without a
+    /// ball. A locked ball moves with the housing (θ = ψ).
+    pub fn ball_angle(&self) -> Option<(T, T)> {
+        match S::BALL {
+            BallKind::None => None,
+            BallKind::Locked => Some(self.tip_angle()),
+            BallKind::Free => {
+                let x = Self::local(&self.state.q, &self.state.v, &self.state.a);
+                Some((x.q[4], x.v[4]))
+            }
+        }
+    }
+
+    /// Ball angle relative to the housing α = θ − ψ \[rad\] and its rate; `None` without a ball.
+    pub fn ball_relative_angle(&self) -> Option<(T, T)> {
+        let (th, thd) = self.ball_angle()?;
+        let (psi, psid) = self.tip_angle();
+        Some((th - psi, thd - psid))
+    }
+
+    /// Time since the start \[s\].
+    pub fn time(&self) -> T {
+        self.state.time
+    }
+
+    /// Static tip deflection of the equilibrium the run started from \[m\].
+    pub fn static_tip_deflection(&self) -> T {
+        self.equilibrium.get(4 * N - 3).copied().unwrap_or(T::zero())
+    }
+}

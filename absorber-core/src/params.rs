@@ -1,0 +1,245 @@
+//! Parameters, with the paper's Table 1 as default, validated on construction.
+//!
+//! All quantities in SI units. Which parts are used depends on the [`crate::Scene`]: a beam-only
+//! model ignores (and does not validate) the tip and ball parameters.
+
+use crate::error::Error;
+use crate::scalar::{lit, Real};
+
+/// The flexible cantilever (paper Table 1, "Flexible beam").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BeamParams<T> {
+    /// Total length L \[m\] (Table 1: 3 elements of 0.365/3 m).
+    pub length: T,
+    /// Total mass \[kg\] (Table 1: 3 × 0.116/3 kg).
+    pub mass: T,
+    /// Cross-section area a \[m²\].
+    pub area: T,
+    /// Young's modulus E \[Pa\].
+    pub modulus: T,
+    /// Second moment of area I \[m⁴\].
+    pub inertia: T,
+}
+
+/// The rigid tip mass welded to the beam end (Table 1, "Tip mass").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TipParams<T> {
+    /// Mass m_t \[kg\].
+    pub mass: T,
+    /// Moment of inertia about its centre of mass J_t \[kg·m²\].
+    pub inertia: T,
+    /// Distance u_t2 from the tip mass centre B up to the beam end A \[m\] (B lies below A).
+    pub offset: T,
+}
+
+/// The ball rolling in the circular track of the housing (Table 1, "Ball"; stops of §3.5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BallParams<T> {
+    /// Mass m_b \[kg\].
+    pub mass: T,
+    /// Moment of inertia about its centre J_b \[kg·m²\] (solid sphere: 0.4 m_b r_b²).
+    pub inertia: T,
+    /// Ball radius r_b \[m\].
+    pub radius: T,
+    /// Track (contact) radius R \[m\]; the ball centre moves on ρ = R − r_b about the beam end.
+    pub track_radius: T,
+    /// Stop angle: the ball hits the housing when |θ − ψ| reaches it \[rad\] (paper: 65°).
+    pub stop_angle: T,
+    /// Coefficient of restitution of a stop impact \[-\] (not in the paper; default 0.5).
+    pub restitution: T,
+    /// Below this relative speed |θ̇ − ψ̇| an impact is plastic and the ball may stay on the
+    /// stop \[rad/s\] (keeps a fixed step from chattering on a resting ball).
+    pub stick_speed: T,
+    /// Ball angle θ(0) from the downward vertical at the start of a run \[rad\] (1°).
+    pub initial_angle: T,
+}
+
+impl<T: Real> BallParams<T> {
+    /// Radius of the ball centre's path ρ = R − r_b \[m\].
+    pub fn path_radius(&self) -> T {
+        self.track_radius - self.radius
+    }
+
+    /// Small-oscillation frequency of the ball in a fixed housing, `√(m_b g ρ / J_θ) / 2π`
+    /// with `J_θ = (m_b + J_b/r_b²) ρ²` (= √(g / 1.4ρ) / 2π for a solid ball) \[Hz\].
+    pub fn fixed_housing_frequency(&self, gravity: T) -> T {
+        let rho = self.path_radius();
+        let j_theta = (self.mass + self.inertia / (self.radius * self.radius)) * rho * rho;
+        (self.mass * gravity * rho / j_theta).sqrt() / T::two_pi()
+    }
+}
+
+/// Newmark integrator with Newton–Raphson (Table 1, "Numerical integration parameters").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Integrator<T> {
+    /// Newmark γ \[-\]: 0.5 conserves energy, larger values damp (paper: 0.7).
+    pub gamma: T,
+    /// Newmark β \[-\]: unconditionally stable for β ≥ (γ + ½)²/4 (paper: 0.36).
+    pub beta: T,
+    /// Time step h \[s\] (paper: 0.003).
+    pub step: T,
+    /// Newton tolerance \[-\]: iterations stop when the position increment, in units of the
+    /// beam length for positions and in radians for slopes and angles, is at most this.
+    pub tolerance: T,
+    /// Hard maximum of Newton iterations per solve (paper: 100).
+    pub max_iterations: u32,
+}
+
+/// Optional structural damping (off by default: the paper's only damping is γ > ½).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Damping<T> {
+    /// Stiffness-proportional coefficient c in `C = c K_b` \[s\]; modal damping ratio
+    /// ζ = c ω / 2 (use [`Damping::from_ratio`]).
+    pub stiffness_proportional: T,
+}
+
+impl<T: Real> Damping<T> {
+    /// The coefficient that gives damping ratio `zeta` at `frequency_hz`.
+    pub fn from_ratio(zeta: T, frequency_hz: T) -> Self {
+        Self { stiffness_proportional: lit::<T>(2.0) * zeta / (T::two_pi() * frequency_hz) }
+    }
+}
+
+/// Everything the model needs. `Params::default()` is the paper's Table 1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params<T> {
+    /// Cantilever.
+    pub beam: BeamParams<T>,
+    /// Tip mass (used by scenes with a tip).
+    pub tip: TipParams<T>,
+    /// Ball (used by scenes with a ball).
+    pub ball: BallParams<T>,
+    /// Integrator.
+    pub integrator: Integrator<T>,
+    /// Structural damping.
+    pub damping: Damping<T>,
+    /// Gravity g \[m/s²\] along −y (9.81; zero is allowed).
+    pub gravity: T,
+}
+
+impl<T: Real> Default for Params<T> {
+    fn default() -> Self {
+        Self {
+            beam: BeamParams {
+                length: lit(0.365),
+                mass: lit(0.116),
+                area: lit(4.06e-5),
+                modulus: lit(200e9),
+                inertia: lit(8.47e-12),
+            },
+            tip: TipParams { mass: lit(0.1154), inertia: lit(1.871e-5), offset: lit(0.0204) },
+            ball: BallParams {
+                mass: lit(0.014),
+                inertia: lit(3.15e-7),
+                radius: lit(0.0075),
+                track_radius: lit(0.0395),
+                stop_angle: lit(65.0f64.to_radians()),
+                restitution: lit(0.5),
+                stick_speed: lit(0.02),
+                initial_angle: lit(1.0f64.to_radians()),
+            },
+            integrator: Integrator {
+                gamma: lit(0.7),
+                beta: lit(0.36),
+                step: lit(0.003),
+                tolerance: lit(1e-5),
+                max_iterations: 100,
+            },
+            damping: Damping { stiffness_proportional: T::zero() },
+            gravity: lit(9.81),
+        }
+    }
+}
+
+fn positive<T: Real>(x: T, field: &'static str) -> Result<(), Error> {
+    if !x.is_finite() {
+        Err(Error::InvalidParameter { field, reason: "must be finite" })
+    } else if x <= T::zero() {
+        Err(Error::InvalidParameter { field, reason: "must be positive" })
+    } else {
+        Ok(())
+    }
+}
+
+fn non_negative<T: Real>(x: T, field: &'static str) -> Result<(), Error> {
+    if !x.is_finite() {
+        Err(Error::InvalidParameter { field, reason: "must be finite" })
+    } else if x < T::zero() {
+        Err(Error::InvalidParameter { field, reason: "must not be negative" })
+    } else {
+        Ok(())
+    }
+}
+
+impl<T: Real> Params<T> {
+    /// Checks every field the scene uses; the error names the first bad field.
+    pub fn validate(&self, has_tip: bool, has_ball: bool) -> Result<(), Error> {
+        let b = &self.beam;
+        positive(b.length, "beam.length")?;
+        positive(b.mass, "beam.mass")?;
+        positive(b.area, "beam.area")?;
+        positive(b.modulus, "beam.modulus")?;
+        positive(b.inertia, "beam.inertia")?;
+        if has_tip {
+            positive(self.tip.mass, "tip.mass")?;
+            positive(self.tip.inertia, "tip.inertia")?;
+            non_negative(self.tip.offset, "tip.offset")?;
+        }
+        if has_ball {
+            let bl = &self.ball;
+            positive(bl.mass, "ball.mass")?;
+            non_negative(bl.inertia, "ball.inertia")?;
+            positive(bl.radius, "ball.radius")?;
+            positive(bl.track_radius, "ball.track_radius")?;
+            if bl.track_radius <= bl.radius {
+                return Err(Error::InvalidParameter {
+                    field: "ball.track_radius",
+                    reason: "must exceed ball.radius",
+                });
+            }
+            positive(bl.stop_angle, "ball.stop_angle")?;
+            if bl.stop_angle >= T::pi() {
+                return Err(Error::InvalidParameter { field: "ball.stop_angle", reason: "must be below pi" });
+            }
+            non_negative(bl.restitution, "ball.restitution")?;
+            if bl.restitution > T::one() {
+                return Err(Error::InvalidParameter { field: "ball.restitution", reason: "must be at most 1" });
+            }
+            non_negative(bl.stick_speed, "ball.stick_speed")?;
+            if !bl.initial_angle.is_finite() {
+                return Err(Error::InvalidParameter { field: "ball.initial_angle", reason: "must be finite" });
+            }
+            if bl.initial_angle.abs() >= bl.stop_angle {
+                return Err(Error::InvalidParameter {
+                    field: "ball.initial_angle",
+                    reason: "must lie inside the stops",
+                });
+            }
+        }
+        let i = &self.integrator;
+        if !i.gamma.is_finite() || i.gamma < lit(0.5) || i.gamma > T::one() {
+            return Err(Error::InvalidParameter {
+                field: "integrator.gamma",
+                reason: "must lie in [0.5, 1] (γ < 0.5 amplifies)",
+            });
+        }
+        let beta_min = (i.gamma + lit(0.5)) * (i.gamma + lit(0.5)) / lit(4.0);
+        // Allow one part in 10⁶ so that γ = 0.7, β = 0.36 passes after rounding to f32.
+        if !i.beta.is_finite() || i.beta < beta_min * lit(1.0 - 1e-6) || i.beta > T::one() {
+            return Err(Error::InvalidParameter {
+                field: "integrator.beta",
+                reason: "must lie in [(γ+½)²/4, 1] for unconditional stability",
+            });
+        }
+        positive(i.step, "integrator.step")?;
+        positive(i.tolerance, "integrator.tolerance")?;
+        if i.max_iterations == 0 {
+            return Err(Error::InvalidParameter { field: "integrator.max_iterations", reason: "must be at least 1" });
+        }
+        non_negative(self.damping.stiffness_proportional, "damping.stiffness_proportional")?;
+        if !self.gravity.is_finite() {
+            return Err(Error::InvalidParameter { field: "gravity", reason: "must be finite" });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,80 @@
+//! Scenes compose at compile time: what a scene does not have costs neither code nor unknowns.
+//!
+//! A scene is a zero-sized marker type. Its associated constants are known to the compiler, so
+//! every `if S::HAS_BALL { … }` in the model is folded away: the beam-only scene's binary holds
+//! no tip or ball code, and only [`FreeBall`] scenes have the ball angle as an unknown.
+
+/// How the ball is held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BallKind {
+    /// No ball.
+    None,
+    /// Ball fixed in the housing at the bottom of the track (θ = ψ; the paper's passive case).
+    Locked,
+    /// Ball rolling freely in the track (one extra unknown, the orbit angle θ).
+    Free,
+}
+
+/// A scene: which bodies the model contains.
+pub trait Scene: Copy + Default + 'static {
+    /// The tip mass is welded to the beam end.
+    const HAS_TIP: bool;
+    /// The ball.
+    const BALL: BallKind;
+    /// The ±stop angle is enforced (free ball only).
+    const STOPS: bool;
+    /// Unknowns the scene adds after the 4N beam coordinates.
+    const EXTRA_DOFS: usize = if matches!(Self::BALL, BallKind::Free) { 1 } else { 0 };
+    /// Short name for reports.
+    const NAME: &'static str;
+}
+
+/// The cantilever alone.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BeamOnly;
+impl Scene for BeamOnly {
+    const HAS_TIP: bool = false;
+    const BALL: BallKind = BallKind::None;
+    const STOPS: bool = false;
+    const NAME: &'static str = "beam";
+}
+
+/// Cantilever + rigid tip mass (no ball).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TipMass;
+impl Scene for TipMass {
+    const HAS_TIP: bool = true;
+    const BALL: BallKind = BallKind::None;
+    const STOPS: bool = false;
+    const NAME: &'static str = "tip";
+}
+
+/// Cantilever + tip mass + ball locked in its housing (the paper's passive absorber).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LockedBall;
+impl Scene for LockedBall {
+    const HAS_TIP: bool = true;
+    const BALL: BallKind = BallKind::Locked;
+    const STOPS: bool = false;
+    const NAME: &'static str = "locked";
+}
+
+/// Cantilever + tip mass + free ball with the ±stops (the paper's active absorber).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FreeBall;
+impl Scene for FreeBall {
+    const HAS_TIP: bool = true;
+    const BALL: BallKind = BallKind::Free;
+    const STOPS: bool = true;
+    const NAME: &'static str = "free";
+}
+
+/// Free ball without stops (the track is a full circle).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FreeBallNoStops;
+impl Scene for FreeBallNoStops {
+    const HAS_TIP: bool = true;
+    const BALL: BallKind = BallKind::Free;
+    const STOPS: bool = false;
+    const NAME: &'static str = "free-nostops";
+}
