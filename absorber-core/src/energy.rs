@@ -63,16 +63,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let (psi, _) = tip::psi_and_rate(&x);
         let y_a = x.q[1];
         let tip = y_a - self.params.tip.offset * psi.cos();
-        let theta = self.ball_angle_of(s);
+        let (theta, _) = self.orbit_of(s);
         let ball = y_a - self.params.ball.path_radius() * theta.cos();
         Heights { beam, tip, ball }
     }
 
-    fn ball_angle_of(&self, s: &State<T, D>) -> T {
+    /// Orbit angle θ and rate of a state (= ψ for a locked ball).
+    pub(crate) fn orbit_of(&self, s: &State<T, D>) -> (T, T) {
         let x = Self::local(&s.q, &s.v, &s.a);
         match S::BALL {
-            BallKind::Free => x.q[4],
-            _ => tip::psi_and_rate(&x).0,
+            BallKind::Free => tip::orbit_angle(&self.inertia, &x),
+            _ => tip::psi_and_rate(&x),
         }
     }
 
@@ -115,8 +116,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             if !matches!(S::BALL, BallKind::None) {
                 let b = &self.params.ball;
                 let rho = b.path_radius();
-                let theta = self.ball_angle_of(s);
-                let theta_rate = if matches!(S::BALL, BallKind::Free) { x.v[4] } else { rate };
+                let (theta, theta_rate) = self.orbit_of(s);
                 let (vx, vy) = (xd + rho * theta_rate * theta.cos(), yd + rho * theta_rate * theta.sin());
                 let spin = ((rho + b.radius) * rate - rho * theta_rate) / b.radius;
                 e.ball_kinetic = half * (b.mass * (vx * vx + vy * vy) + b.inertia * spin * spin);

@@ -43,7 +43,7 @@ impl Side {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct State<T, const D: usize> {
     /// Displacements of the free nodal coordinates from the straight reference \[m, -\], then
-    /// the ball angle θ from the downward vertical \[rad\] (free-ball scenes).
+    /// the ball's spin angle φ \[rad\] (free-ball scenes; paper eq. 28).
     pub q: SVector<T, D>,
     /// Velocities relative to the base.
     pub v: SVector<T, D>,
@@ -183,8 +183,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
 
     /// Index of the end node's first coordinate.
     const END: usize = 4 * N - 4;
-    /// Index of the ball angle (free ball only).
-    const THETA: usize = 4 * N;
+    /// Index of the ball spin φ (free ball only).
+    const SPIN: usize = 4 * N;
 
     pub(crate) fn local(q: &SVector<T, D>, v: &SVector<T, D>, a: &SVector<T, D>) -> LocalState<T> {
         let mut x = LocalState { q: [T::zero(); LOCAL], v: [T::zero(); LOCAL], a: [T::zero(); LOCAL] };
@@ -333,10 +333,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             contact: Contact::Off,
         };
         if S::EXTRA_DOFS == 1 {
-            if let Some(th) = s.q.get_mut(Self::THETA) {
-                *th += self.params.ball.initial_angle;
+            // θ(0) = θ_eq + initial angle, i.e. φ decreases by ρ/r_b times the angle.
+            let k = self.inertia.orbit_per_spin;
+            if let Some(spin) = s.q.get_mut(Self::SPIN) {
+                *spin -= self.params.ball.initial_angle / k;
             }
-            if S::STOPS && Self::relative_angle(&s).abs() >= self.params.ball.stop_angle {
+            if S::STOPS && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
                 return Err(Error::InvalidParameter {
                     field: "ball.initial_angle",
                     reason: "puts the ball beyond a stop relative to the tilted housing",
@@ -397,24 +399,28 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         Ok((next, solved))
     }
 
-    /// Projects θ, θ̇, θ̈ of a ball resting on a stop onto ψ + side·φ_max.
+    /// Projects a ball resting on a stop onto α = side·α_max: φ = ψ − (ρ/r_b) α, φ̇ = ψ̇, φ̈ = ψ̈.
     fn hold_on_stop(&self, s: &mut State<T, D>, side: Side) {
         let (psi, rate, acc) = tip::psi_all(&Self::local(&s.q, &s.v, &s.a));
         let lock = side.sign::<T>() * self.params.ball.stop_angle;
+        let k = self.inertia.orbit_per_spin;
         if let (Some(q), Some(v), Some(a)) =
-            (s.q.get_mut(Self::THETA), s.v.get_mut(Self::THETA), s.a.get_mut(Self::THETA))
+            (s.q.get_mut(Self::SPIN), s.v.get_mut(Self::SPIN), s.a.get_mut(Self::SPIN))
         {
-            *q = psi + lock;
+            *q = psi - lock / k;
             *v = rate;
             *a = acc;
         }
     }
 
-    /// Relative ball angle α = θ − ψ of a state (0 without a free ball) \[rad\].
-    pub(crate) fn relative_angle(s: &State<T, D>) -> T {
+    /// Relative ball angle α = θ − ψ = (r_b/ρ)(ψ − φ) of a state (0 without a free ball) \[rad\].
+    pub(crate) fn relative_angle(&self, s: &State<T, D>) -> T {
+        if S::EXTRA_DOFS != 1 {
+            return T::zero();
+        }
         let x = Self::local(&s.q, &s.v, &s.a);
         let (psi, _) = tip::psi_and_rate(&x);
-        x.q[4] - psi
+        self.inertia.orbit_per_spin * (psi - x.q[4])
     }
 
     /// Advances the model by one step `h` to the new input `base_accel` = ÿ_b(t + h) \[m/s²\]
@@ -434,7 +440,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             match next.contact {
                 Contact::Off => {
                     let stop = self.params.ball.stop_angle;
-                    let alpha1 = Self::relative_angle(&next);
+                    let alpha1 = self.relative_angle(&next);
                     if alpha1.abs() > stop {
                         next = self.step_with_impact(&start, &next, h, base_accel, alpha1, &mut report)?;
                     }
@@ -477,7 +483,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let stop = self.params.ball.stop_angle;
         let side = if alpha1 > T::zero() { Side::Positive } else { Side::Negative };
         let target = side.sign::<T>() * stop;
-        let alpha0 = Self::relative_angle(start);
+        let alpha0 = self.relative_angle(start);
         let mut tau = (target - alpha0) / (alpha1 - alpha0);
         if !tau.is_finite() || tau < T::zero() {
             tau = T::zero();
@@ -511,8 +517,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         };
         // A second crossing within the same (remaining) step: the ball came straight back
         // onto the stop; end the step with it resting there (plastic).
-        if end.contact == Contact::Off && Self::relative_angle(&end).abs() > stop {
-            let side2 = if Self::relative_angle(&end) > T::zero() { Side::Positive } else { Side::Negative };
+        if end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
+            let side2 = if self.relative_angle(&end) > T::zero() { Side::Positive } else { Side::Negative };
             self.hold_on_stop(&mut end, side2);
             end.contact = Contact::OnStop(side2);
             let acc = self.consistent_acceleration(&end)?;
@@ -540,11 +546,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let lock = side.sign::<T>() * ball.stop_angle;
         let x = Self::local(&s.q, &s.v, &s.a);
         let (psi, _) = tip::psi_and_rate(&x);
-        if let Some(th) = s.q.get_mut(Self::THETA) {
-            *th = psi + lock;
+        if let Some(spin) = s.q.get_mut(Self::SPIN) {
+            *spin = psi - lock / self.inertia.orbit_per_spin;
         }
         let x = Self::local(&s.q, &s.v, &s.a);
-        let grad_local = tip::gap_gradient(&x);
+        let grad_local = tip::gap_gradient(&self.inertia, &x);
         let mut grad = SVector::<T, D>::zeros();
         for (k, gk) in grad_local.iter().enumerate() {
             if let Some(g) = grad.get_mut(Self::END + k) {
@@ -578,6 +584,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             }
             let lambda = -(T::one() + e) * speed / w;
             s.v += y * lambda;
+            // Λ is conjugate to α (N·m·s); the contact point moves at ρ α̇ along the track.
             impact.impulse = lambda / ball.path_radius();
             impact.energy_loss = lit::<T>(0.5) * (T::one() - e * e) * speed * speed / w;
         }
@@ -618,8 +625,8 @@ mod tests {
             a[i] = 20.0 * (0.7 * f).sin();
         }
         if S::EXTRA_DOFS == 1 {
-            q[4 * N] = 0.6;
-            v[4 * N] = 9.0;
+            q[4 * N] = -2.5;
+            v[4 * N] = -40.0;
         }
         let ch = Chain { c_q: 0.36 * 9e-6, c_v: 0.7 * 3e-3, c_m: 1.0 };
         let (_, jac, _) = m.assemble(&q, &v, &a, 9.0, &ch, contact);

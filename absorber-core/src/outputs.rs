@@ -32,10 +32,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         match S::BALL {
             BallKind::None => None,
             BallKind::Locked => Some(self.tip_angle()),
-            BallKind::Free => {
-                let x = Self::local(&self.state.q, &self.state.v, &self.state.a);
-                Some((x.q[4], x.v[4]))
-            }
+            BallKind::Free => Some(self.orbit_of(&self.state)),
         }
     }
 

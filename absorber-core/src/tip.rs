@@ -16,9 +16,15 @@
 //!
 //! `E_p` is the generalized inertia-plus-weight force the bodies put on the beam end. With
 //! `ψ̇ = j·ȧ`, `j = (−a₄, a₃)/s²`, `ψ̈ = j·ä − 2ψ̇ (a₃ȧ₃ + a₄ȧ₄)/s²`, `s² = a₃² + a₄²`, the map
-//! to the end-node coordinates is the chain rule `r = Pᵀ E_p`: rows `(E_x, E_y, j₃ E_ψ, j₄ E_ψ)`
-//! and, for a free ball, `E_θ`. A locked ball (or one resting on a stop) has `θ = ψ + φ_lock`, so
-//! its `E_θ` adds to `E_ψ`.
+//! to the end-node coordinates is the chain rule `r = Pᵀ E_p`: rows `(E_x, E_y, j₃ E_ψ, j₄ E_ψ)`.
+//!
+//! **Ball unknown.** As in the paper's partition (eq. 28), the free ball's unknown is its spin
+//! angle φ, not the orbit angle θ. Rolling without slip integrates to
+//! `θ = (R_tr ψ − r_b φ) / ρ` (MODEL-DERIVATION §3), so `E_θ` enters the ψ rows with weight
+//! `R_tr/ρ` and the φ row is `E_φ = −(r_b/ρ) E_θ`. The relative angle is
+//! `α = θ − ψ = (r_b/ρ)(ψ − φ)`. Using the paper's independent coordinates lets the full
+//! solver (`host-sim`) integrate exactly the same discrete equations. A locked ball (or one
+//! resting on a stop) has `θ = ψ + α_lock`, so its `E_θ` adds to `E_ψ`.
 //!
 //! Everything is evaluated in [`Dual`] arithmetic seeded with the Newmark chain coefficients,
 //! so one pass gives the residual and its exact Jacobian `c_m ∂r/∂ä + c_v ∂r/∂ȧ + c_q ∂r/∂q`.
@@ -28,7 +34,7 @@ use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::BallKind;
 
-/// Local coordinates: end-node displacement (x, y), slope displacement (x, y), ball angle θ.
+/// Local coordinates: end-node displacement (x, y), slope displacement (x, y), ball spin φ.
 pub const LOCAL: usize = 5;
 type D5<T> = Dual<T, LOCAL>;
 
@@ -39,7 +45,7 @@ pub enum BallMode<T> {
     Absent,
     /// Ball fixed in the housing at relative angle `φ_lock` (locked scene, or resting on a stop).
     Held(T),
-    /// Ball free: θ is an unknown.
+    /// Ball free: its spin φ is an unknown.
     Free,
 }
 
@@ -58,6 +64,10 @@ pub struct TipInertia<T> {
     pub j_theta: T,
     /// J_ψθ \[kg·m²\].
     pub j_psi_theta: T,
+    /// R_tr / ρ: ∂θ/∂ψ at fixed spin.
+    pub orbit_per_tilt: T,
+    /// r_b / ρ: −∂θ/∂φ.
+    pub orbit_per_spin: T,
 }
 
 impl<T: Real> TipInertia<T> {
@@ -72,6 +82,8 @@ impl<T: Real> TipInertia<T> {
             ball_moment: zero,
             j_theta: zero,
             j_psi_theta: zero,
+            orbit_per_tilt: zero,
+            orbit_per_spin: zero,
         };
         if !matches!(ball, BallKind::None) {
             let b = &p.ball;
@@ -83,6 +95,8 @@ impl<T: Real> TipInertia<T> {
             s.ball_moment = b.mass * rho;
             s.j_theta = (b.mass + jr) * rho * rho;
             s.j_psi_theta = -jr * r_tr * rho;
+            s.orbit_per_tilt = r_tr / rho;
+            s.orbit_per_spin = b.radius / rho;
         }
         s
     }
@@ -155,12 +169,23 @@ pub fn psi_all<T: Real>(x: &LocalState<T>) -> (T, T, T) {
     (p.psi.re, p.rate.re, p.accel.re)
 }
 
-/// Gradient of the relative ball angle `G = θ − ψ` with respect to the local coordinates.
-pub fn gap_gradient<T: Real>(x: &LocalState<T>) -> [T; LOCAL] {
+/// Orbit angle θ and its rate from the local state of a free ball (spin φ at index 4).
+pub fn orbit_angle<T: Real>(inertia: &TipInertia<T>, x: &LocalState<T>) -> (T, T) {
+    let (psi, rate) = psi_and_rate(x);
+    (
+        inertia.orbit_per_tilt * psi - inertia.orbit_per_spin * x.q[4],
+        inertia.orbit_per_tilt * rate - inertia.orbit_per_spin * x.v[4],
+    )
+}
+
+/// Gradient of the relative ball angle `G = θ − ψ = (r_b/ρ)(ψ − φ)` with respect to the local
+/// coordinates.
+pub fn gap_gradient<T: Real>(inertia: &TipInertia<T>, x: &LocalState<T>) -> [T; LOCAL] {
     let a3 = T::one() + x.q[2];
     let a4 = x.q[3];
     let s2 = a3 * a3 + a4 * a4;
-    [T::zero(), T::zero(), a4 / s2, -a3 / s2, T::one()]
+    let k = inertia.orbit_per_spin;
+    [T::zero(), T::zero(), -k * a4 / s2, k * a3 / s2, -k]
 }
 
 /// Residual rows of the tip body and ball on the local coordinates, with their Jacobian.
@@ -192,11 +217,16 @@ pub fn residual<T: Real>(
     let theta = match mode {
         BallMode::Absent => None,
         BallMode::Held(lock) => Some((ps.psi.add_re(lock), ps.rate, ps.accel)),
-        BallMode::Free => Some((
-            D5::variable(x.q[4], 4, ch.c_q),
-            D5::variable(x.v[4], 4, ch.c_v),
-            D5::variable(x.a[4], 4, ch.c_m),
-        )),
+        BallMode::Free => {
+            // θ = (R_tr ψ − r_b φ)/ρ, and likewise for its rates (linear in ψ and φ).
+            let (kt, ks) = (inertia.orbit_per_tilt, inertia.orbit_per_spin);
+            let orbit = |p: D5<T>, f: D5<T>| p.scale(kt) - f.scale(ks);
+            Some((
+                orbit(ps.psi, D5::variable(x.q[4], 4, ch.c_q)),
+                orbit(ps.rate, D5::variable(x.v[4], 4, ch.c_v)),
+                orbit(ps.accel, D5::variable(x.a[4], 4, ch.c_m)),
+            ))
+        }
     };
     if let Some((th, th_d, th_dd)) = theta {
         let (s_th, c_th) = (th.sin(), th.cos());
@@ -209,11 +239,14 @@ pub fn residual<T: Real>(
             + ps.accel.scale(inertia.j_psi_theta);
         contact = e_theta.re;
         match mode {
-            BallMode::Free => row4 = e_theta,
+            BallMode::Free => {
+                e_psi = e_psi + e_theta.scale(inertia.orbit_per_tilt);
+                row4 = e_theta.scale(-inertia.orbit_per_spin);
+            }
             _ => {
                 e_psi = e_psi + e_theta;
                 if free_theta_is_unknown {
-                    // Ball held on a stop: θ stays an unknown, tied to ψ at acceleration level.
+                    // Ball held on a stop: φ stays an unknown, tied to ψ at acceleration level.
                     row4 = D5::variable(x.a[4], 4, ch.c_m) - ps.accel;
                 }
             }
