@@ -193,7 +193,10 @@ impl<T: Real> Element<T> {
 
     /// Axial elastic force `Q_l = ∫ EA ε S_xᵀ r′ dx` (eqs. 12–13) and its exact tangent
     /// `K_l = ∫ EA [(S_xᵀ r′)(S_xᵀ r′)ᵀ + ε S_xᵀ S_x] dx`, by 5-point Gauss (exact).
-    pub fn axial_force_and_tangent(&self, u: &ElementVector<T>) -> (ElementVector<T>, ElementMatrix<T>) {
+    pub fn axial_force_and_tangent(
+        &self,
+        u: &ElementVector<T>,
+    ) -> (ElementVector<T>, ElementMatrix<T>) {
         let l = self.length;
         let mut force = ElementVector::zeros();
         let mut tangent = ElementMatrix::zeros();
@@ -244,14 +247,23 @@ mod tests {
     use super::*;
 
     fn el() -> Element<f64> {
-        Element { length: 0.2, axial_rigidity: 8.12e6, bending_rigidity: 1.694, mass_per_length: 0.3178 }
+        Element {
+            length: 0.2,
+            axial_rigidity: 8.12e6,
+            bending_rigidity: 1.694,
+            mass_per_length: 0.3178,
+        }
     }
 
     /// The closed-form matrices equal their defining integrals (Gauss, exact for these degrees).
     #[test]
     fn closed_form_mass_and_bending_equal_quadrature() {
         let e = el();
-        let (l, mut m, mut k) = (e.length, ElementMatrix::<f64>::zeros(), ElementMatrix::<f64>::zeros());
+        let (l, mut m, mut k) = (
+            e.length,
+            ElementMatrix::<f64>::zeros(),
+            ElementMatrix::<f64>::zeros(),
+        );
         for (xi, w) in GAUSS5 {
             let s = shape(l, xi);
             let sxx = shape_xx(l, xi);
@@ -276,7 +288,8 @@ mod tests {
     #[test]
     fn axial_tangent_is_derivative_of_force() {
         let e = el();
-        let u = ElementVector::from_column_slice(&[0.0, 0.0, 0.01, -0.05, 1e-4, -0.02, -0.003, -0.1]);
+        let u =
+            ElementVector::from_column_slice(&[0.0, 0.0, 0.01, -0.05, 1e-4, -0.02, -0.003, -0.1]);
         let (_, k) = e.axial_force_and_tangent(&u);
         for j in 0..8 {
             let h = 1e-6;
@@ -284,9 +297,15 @@ mod tests {
             up[j] += h;
             let mut um = u;
             um[j] -= h;
-            let fd = (e.axial_force_and_tangent(&up).0 - e.axial_force_and_tangent(&um).0) / (2.0 * h);
+            let fd =
+                (e.axial_force_and_tangent(&up).0 - e.axial_force_and_tangent(&um).0) / (2.0 * h);
             for i in 0..8 {
-                assert!((fd[i] - k[(i, j)]).abs() < 1e-6 * k.amax(), "({i},{j}) {} vs {}", fd[i], k[(i, j)]);
+                assert!(
+                    (fd[i] - k[(i, j)]).abs() < 1e-6 * k.amax(),
+                    "({i},{j}) {} vs {}",
+                    fd[i],
+                    k[(i, j)]
+                );
             }
         }
     }
@@ -295,7 +314,8 @@ mod tests {
     #[test]
     fn axial_force_is_gradient_of_energy() {
         let e = el();
-        let u = ElementVector::from_column_slice(&[0.0, 1e-3, 0.01, -0.05, 1e-4, -0.02, -0.003, -0.1]);
+        let u =
+            ElementVector::from_column_slice(&[0.0, 1e-3, 0.01, -0.05, 1e-4, -0.02, -0.003, -0.1]);
         let (f, _) = e.axial_force_and_tangent(&u);
         for j in 0..8 {
             let h = 1e-7;
@@ -317,13 +337,28 @@ mod tests {
         let (c, s) = (a.cos(), a.sin());
         let l = e.length;
         // node i at origin, node j at l; rotated: r = (c x, s x), r′ = (c, s).
-        let u = ElementVector::from_column_slice(&[0.0, 0.0, c - 1.0, s, l * c - l, l * s, c - 1.0, s]);
+        let u =
+            ElementVector::from_column_slice(&[0.0, 0.0, c - 1.0, s, l * c - l, l * s, c - 1.0, s]);
         for xi in [0.0, 0.3, 1.0] {
             assert!(e.axial_strain(&u, xi).abs() < 1e-15);
         }
-        let ef = Element::<f32> { length: 0.2, axial_rigidity: 8.12e6, bending_rigidity: 1.694, mass_per_length: 0.3178 };
+        let ef = Element::<f32> {
+            length: 0.2,
+            axial_rigidity: 8.12e6,
+            bending_rigidity: 1.694,
+            mass_per_length: 0.3178,
+        };
         let stretch = 1e-7f32; // uniform strain 1e-7
-        let u = SVector::<f32, 8>::from_column_slice(&[0.0, 0.0, stretch, 0.0, 0.2 * stretch, 0.0, stretch, 0.0]);
+        let u = SVector::<f32, 8>::from_column_slice(&[
+            0.0,
+            0.0,
+            stretch,
+            0.0,
+            0.2 * stretch,
+            0.0,
+            stretch,
+            0.0,
+        ]);
         let eps = ef.axial_strain(&u, 0.5);
         assert!((eps - 1e-7).abs() < 1e-12, "{eps}");
     }

@@ -63,14 +63,20 @@ impl<T: Real> Beam<T> {
             let (qe, ve, ae) = (gather(q, k), gather(v, k), gather(a, k));
             let (qa, ka) = self.element.axial_force_and_tangent(&qe);
             let re = self.mass * ae + self.stiffness * (qe + ve * self.damping) + qa - weight;
-            let je = self.mass * ch.c_m + self.stiffness * (ch.c_q + ch.c_v * self.damping) + ka * ch.c_q;
+            let je = self.mass * ch.c_m
+                + self.stiffness * (ch.c_q + ch.c_v * self.damping)
+                + ka * ch.c_q;
             for i in 0..8 {
-                let Some(gi) = global_index(k, i) else { continue };
+                let Some(gi) = global_index(k, i) else {
+                    continue;
+                };
                 if let Some(dst) = r.get_mut(gi) {
                     *dst += re[i];
                 }
                 for j in 0..8 {
-                    let Some(gj) = global_index(k, j) else { continue };
+                    let Some(gj) = global_index(k, j) else {
+                        continue;
+                    };
                     if let Some(dst) = jac.get_mut((gi, gj)) {
                         *dst += je[(i, j)];
                     }

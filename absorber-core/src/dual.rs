@@ -22,7 +22,10 @@ impl<T: Real, const K: usize> Dual<T, K> {
     /// A constant (all derivatives zero).
     #[inline]
     pub fn constant(re: T) -> Self {
-        Self { re, du: [T::zero(); K] }
+        Self {
+            re,
+            du: [T::zero(); K],
+        }
     }
 
     /// A variable with derivative `seed` along direction `k` (a constant if `k >= K`).
@@ -66,7 +69,10 @@ impl<T: Real, const K: usize> Dual<T, K> {
         for ((d, dy), dx) in du.iter_mut().zip(self.du.iter()).zip(x.du.iter()) {
             *d = (x.re * *dy - self.re * *dx) / r2;
         }
-        Self { re: self.re.atan2(x.re), du }
+        Self {
+            re: self.re.atan2(x.re),
+            du,
+        }
     }
 
     /// Multiplies by a plain scalar.
@@ -115,7 +121,10 @@ impl<T: Real, const K: usize> Mul for Dual<T, K> {
         for ((d, a), b) in du.iter_mut().zip(self.du.iter()).zip(o.du.iter()) {
             *d = *a * o.re + self.re * *b;
         }
-        Self { re: self.re * o.re, du }
+        Self {
+            re: self.re * o.re,
+            du,
+        }
     }
 }
 

@@ -95,14 +95,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         };
         for k in 0..N {
             let u = gather(&s.q, k);
-            e.beam_strain += self.beam.element.axial_energy(&u) + self.beam.element.bending_energy(&u);
+            e.beam_strain +=
+                self.beam.element.axial_energy(&u) + self.beam.element.bending_energy(&u);
             let mut v = gather(&s.v, k);
             v[1] += base_velocity;
             v[5] += base_velocity;
             e.beam_kinetic += half * v.dot(&(self.beam.mass * v));
         }
         let now = self.heights(s);
-        let eq_state = State { q: self.equilibrium, ..*s };
+        let eq_state = State {
+            q: self.equilibrium,
+            ..*s
+        };
         let eq = self.heights(&eq_state);
         e.beam_potential = g * (now.beam - eq.beam + self.params.beam.mass * base_displacement);
         if S::HAS_TIP {
@@ -110,14 +114,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             let (psi, rate) = tip::psi_and_rate(&x);
             let (xd, yd) = (x.v[0], x.v[1] + base_velocity);
             let p = &self.params.tip;
-            let (vx, vy) = (xd + p.offset * rate * psi.cos(), yd + p.offset * rate * psi.sin());
+            let (vx, vy) = (
+                xd + p.offset * rate * psi.cos(),
+                yd + p.offset * rate * psi.sin(),
+            );
             e.tip_kinetic = half * (p.mass * (vx * vx + vy * vy) + p.inertia * rate * rate);
             e.tip_potential = g * p.mass * (now.tip - eq.tip + base_displacement);
             if !matches!(S::BALL, BallKind::None) {
                 let b = &self.params.ball;
                 let rho = b.path_radius();
                 let (theta, theta_rate) = self.orbit_of(s);
-                let (vx, vy) = (xd + rho * theta_rate * theta.cos(), yd + rho * theta_rate * theta.sin());
+                let (vx, vy) = (
+                    xd + rho * theta_rate * theta.cos(),
+                    yd + rho * theta_rate * theta.sin(),
+                );
                 let spin = ((rho + b.radius) * rate - rho * theta_rate) / b.radius;
                 e.ball_kinetic = half * (b.mass * (vx * vx + vy * vy) + b.inertia * spin * spin);
                 e.ball_potential = g * b.mass * (now.ball - eq.ball + base_displacement);

@@ -8,7 +8,10 @@ use nalgebra::{SMatrix, SVector};
 
 /// Solves `A x = b` by Gaussian elimination with partial pivoting; `None` if `A` is singular
 /// (a zero pivot) or a value is not finite.
-pub fn solve<T: Real, const D: usize>(mut a: SMatrix<T, D, D>, mut b: SVector<T, D>) -> Option<SVector<T, D>> {
+pub fn solve<T: Real, const D: usize>(
+    mut a: SMatrix<T, D, D>,
+    mut b: SVector<T, D>,
+) -> Option<SVector<T, D>> {
     for k in 0..D {
         // Pivot: largest |a[i,k]| for i ≥ k.
         let mut p = k;
@@ -64,6 +67,10 @@ mod tests {
         let x = SVector::<f64, 3>::new(1.0, -2.0, 0.5);
         let got = solve(a, a * x).expect("regular");
         assert!((got - x).amax() < 1e-14);
-        assert!(solve(SMatrix::<f64, 2, 2>::new(1.0, 2.0, 2.0, 4.0), SVector::<f64, 2>::new(1.0, 1.0)).is_none());
+        assert!(solve(
+            SMatrix::<f64, 2, 2>::new(1.0, 2.0, 2.0, 4.0),
+            SVector::<f64, 2>::new(1.0, 1.0)
+        )
+        .is_none());
     }
 }

@@ -113,7 +113,10 @@ pub struct Model<T, S, const N: usize, const D: usize> {
 impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     const CHECK: () = {
         assert!(N >= 1, "a beam needs at least one element");
-        assert!(D == 4 * N + S::EXTRA_DOFS, "D must equal 4N + the scene's extra unknowns");
+        assert!(
+            D == 4 * N + S::EXTRA_DOFS,
+            "D must equal 4N + the scene's extra unknowns"
+        );
     };
 
     /// Builds the model, solves the static equilibrium under gravity by load stepping and starts
@@ -159,7 +162,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             inertia: TipInertia::new(&params, S::HAS_TIP, S::BALL),
             params,
             beam,
-            state: State { q: z, v: z, a: z, time: T::zero(), base_accel: T::zero(), contact: Contact::Off },
+            state: State {
+                q: z,
+                v: z,
+                a: z,
+                time: T::zero(),
+                base_accel: T::zero(),
+                contact: Contact::Off,
+            },
             equilibrium: z,
             scale,
             _scene: PhantomData,
@@ -187,13 +197,22 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     const SPIN: usize = 4 * N;
 
     pub(crate) fn local(q: &SVector<T, D>, v: &SVector<T, D>, a: &SVector<T, D>) -> LocalState<T> {
-        let mut x = LocalState { q: [T::zero(); LOCAL], v: [T::zero(); LOCAL], a: [T::zero(); LOCAL] };
+        let mut x = LocalState {
+            q: [T::zero(); LOCAL],
+            v: [T::zero(); LOCAL],
+            a: [T::zero(); LOCAL],
+        };
         let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
         for k in 0..n {
             let g = Self::END + k;
-            if let (Some(qq), Some(vv), Some(aa), Some(dq), Some(dv), Some(da)) =
-                (q.get(g), v.get(g), a.get(g), x.q.get_mut(k), x.v.get_mut(k), x.a.get_mut(k))
-            {
+            if let (Some(qq), Some(vv), Some(aa), Some(dq), Some(dv), Some(da)) = (
+                q.get(g),
+                v.get(g),
+                a.get(g),
+                x.q.get_mut(k),
+                x.v.get_mut(k),
+                x.a.get_mut(k),
+            ) {
                 *dq = *qq;
                 *dv = *vv;
                 *da = *aa;
@@ -229,7 +248,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         if S::HAS_TIP {
             let x = Self::local(q, v, a);
             let mode = Self::ball_mode(contact, self.params.ball.stop_angle);
-            let (rows, lambda) = tip::residual(&self.inertia, &x, ch, g_eff, mode, S::EXTRA_DOFS == 1);
+            let (rows, lambda) =
+                tip::residual(&self.inertia, &x, ch, g_eff, mode, S::EXTRA_DOFS == 1);
             contact_force = lambda;
             let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
             for (i, row) in rows.iter().enumerate().take(n) {
@@ -292,10 +312,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 x += dx;
             }
             if increment <= tol {
-                return Ok(Solved { x, iterations: it, increment });
+                return Ok(Solved {
+                    x,
+                    iterations: it,
+                    increment,
+                });
             }
         }
-        Err(Error::NoConvergence { iterations: max, increment: to_f64(increment) })
+        Err(Error::NoConvergence {
+            iterations: max,
+            increment: to_f64(increment),
+        })
     }
 
     /// Static equilibrium under gravity (zero base acceleration) by load stepping in 4 steps.
@@ -303,7 +330,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub fn solve_static(&mut self) -> Result<u32, Error> {
         const LOAD_STEPS: usize = 4;
         let z = SVector::<T, D>::zeros();
-        let ch = Chain { c_q: T::one(), c_v: T::zero(), c_m: T::zero() };
+        let ch = Chain {
+            c_q: T::one(),
+            c_v: T::zero(),
+            c_m: T::zero(),
+        };
         let mut q = z;
         let mut iterations = 0;
         for k in 1..=LOAD_STEPS {
@@ -313,7 +344,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             iterations += s.iterations;
         }
         self.equilibrium = q;
-        self.state = State { q, v: z, a: z, time: T::zero(), base_accel: T::zero(), contact: Contact::Off };
+        self.state = State {
+            q,
+            v: z,
+            a: z,
+            time: T::zero(),
+            base_accel: T::zero(),
+            contact: Contact::Off,
+        };
         Ok(iterations)
     }
 
@@ -355,25 +393,81 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         self.state = state;
     }
 
+    /// Starts from the configuration `q` with velocities `v` (relative to the base) at time 0,
+    /// with input `base_accel`; computes the consistent acceleration. The ball is off the stops.
+    /// On error the state is unchanged.
+    pub fn set_configuration(
+        &mut self,
+        q: SVector<T, D>,
+        v: SVector<T, D>,
+        base_accel: T,
+    ) -> Result<(), Error> {
+        if !base_accel.is_finite() {
+            return Err(Error::NonFiniteInput);
+        }
+        if !q.iter().chain(v.iter()).all(|z| z.is_finite()) {
+            return Err(Error::NonFiniteState);
+        }
+        let mut s = State {
+            q,
+            v,
+            a: SVector::zeros(),
+            time: T::zero(),
+            base_accel,
+            contact: Contact::Off,
+        };
+        if S::STOPS && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
+            return Err(Error::InvalidParameter {
+                field: "q",
+                reason: "puts the ball beyond a stop",
+            });
+        }
+        s.a = self.consistent_acceleration(&s)?.x;
+        self.state = s;
+        Ok(())
+    }
+
     fn effective_gravity(&self, base_accel: T) -> T {
         self.params.gravity + base_accel
     }
 
     /// Solves `r(q, v, a) = 0` for the acceleration at fixed q, v (linear in a: 2 iterations).
     fn consistent_acceleration(&self, s: &State<T, D>) -> Result<Solved<T, D>, Error> {
-        let ch = Chain { c_q: T::zero(), c_v: T::zero(), c_m: T::one() };
+        let ch = Chain {
+            c_q: T::zero(),
+            c_v: T::zero(),
+            c_m: T::one(),
+        };
         let i = &self.params.integrator;
         let c_pos = i.beta * i.step * i.step;
-        self.newton(&s.q, &s.v, &SVector::zeros(), s.a, &ch, c_pos, self.effective_gravity(s.base_accel), s.contact)
+        self.newton(
+            &s.q,
+            &s.v,
+            &SVector::zeros(),
+            s.a,
+            &ch,
+            c_pos,
+            self.effective_gravity(s.base_accel),
+            s.contact,
+        )
     }
 
     /// One Newmark step of length `h` from `s` to the input `base_accel` at its end.
-    fn newmark(&self, s: &State<T, D>, h: T, base_accel: T) -> Result<(State<T, D>, Solved<T, D>), Error> {
+    fn newmark(
+        &self,
+        s: &State<T, D>,
+        h: T,
+        base_accel: T,
+    ) -> Result<(State<T, D>, Solved<T, D>), Error> {
         let i = &self.params.integrator;
         let half = lit::<T>(0.5);
         let q_pred = s.q + s.v * h + s.a * (h * h * (half - i.beta));
         let v_pred = s.v + s.a * (h * (T::one() - i.gamma));
-        let ch = Chain { c_q: i.beta * h * h, c_v: i.gamma * h, c_m: T::one() };
+        let ch = Chain {
+            c_q: i.beta * h * h,
+            c_v: i.gamma * h,
+            c_m: T::one(),
+        };
         let solved = self.newton(
             &q_pred,
             &v_pred,
@@ -404,9 +498,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let (psi, rate, acc) = tip::psi_all(&Self::local(&s.q, &s.v, &s.a));
         let lock = side.sign::<T>() * self.params.ball.stop_angle;
         let k = self.inertia.orbit_per_spin;
-        if let (Some(q), Some(v), Some(a)) =
-            (s.q.get_mut(Self::SPIN), s.v.get_mut(Self::SPIN), s.a.get_mut(Self::SPIN))
-        {
+        if let (Some(q), Some(v), Some(a)) = (
+            s.q.get_mut(Self::SPIN),
+            s.v.get_mut(Self::SPIN),
+            s.a.get_mut(Self::SPIN),
+        ) {
             *q = psi - lock / k;
             *v = rate;
             *a = acc;
@@ -434,7 +530,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let h = self.params.integrator.step;
         let start = self.state;
         let (mut next, solved) = self.newmark(&start, h, base_accel)?;
-        let mut report = StepReport { iterations: solved.iterations, increment: solved.increment, impact: None };
+        let mut report = StepReport {
+            iterations: solved.iterations,
+            increment: solved.increment,
+            impact: None,
+        };
 
         if S::STOPS && S::EXTRA_DOFS == 1 {
             match next.contact {
@@ -442,7 +542,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                     let stop = self.params.ball.stop_angle;
                     let alpha1 = self.relative_angle(&next);
                     if alpha1.abs() > stop {
-                        next = self.step_with_impact(&start, &next, h, base_accel, alpha1, &mut report)?;
+                        next = self.step_with_impact(
+                            &start,
+                            &next,
+                            h,
+                            base_accel,
+                            alpha1,
+                            &mut report,
+                        )?;
                     }
                 }
                 Contact::OnStop(side) => {
@@ -454,7 +561,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 }
             }
         }
-        if !(next.q.iter().chain(next.v.iter()).chain(next.a.iter()).all(|z| z.is_finite())) {
+        if !(next
+            .q
+            .iter()
+            .chain(next.v.iter())
+            .chain(next.a.iter())
+            .all(|z| z.is_finite()))
+        {
             return Err(Error::NonFiniteState);
         }
         self.state = next;
@@ -464,8 +577,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// Generalized contact force the stop puts on the ball along θ in a held state.
     fn contact_force(&self, s: &State<T, D>) -> T {
         let z = T::zero();
-        let ch = Chain { c_q: z, c_v: z, c_m: z };
-        let (_, _, f) = self.assemble(&s.q, &s.v, &s.a, self.effective_gravity(s.base_accel), &ch, s.contact);
+        let ch = Chain {
+            c_q: z,
+            c_v: z,
+            c_m: z,
+        };
+        let (_, _, f) = self.assemble(
+            &s.q,
+            &s.v,
+            &s.a,
+            self.effective_gravity(s.base_accel),
+            &ch,
+            s.contact,
+        );
         f
     }
 
@@ -481,7 +605,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         report: &mut StepReport<T>,
     ) -> Result<State<T, D>, Error> {
         let stop = self.params.ball.stop_angle;
-        let side = if alpha1 > T::zero() { Side::Positive } else { Side::Negative };
+        let side = if alpha1 > T::zero() {
+            Side::Positive
+        } else {
+            Side::Negative
+        };
         let target = side.sign::<T>() * stop;
         let alpha0 = self.relative_angle(start);
         let mut tau = (target - alpha0) / (alpha1 - alpha0);
@@ -518,7 +646,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         // A second crossing within the same (remaining) step: the ball came straight back
         // onto the stop; end the step with it resting there (plastic).
         if end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
-            let side2 = if self.relative_angle(&end) > T::zero() { Side::Positive } else { Side::Negative };
+            let side2 = if self.relative_angle(&end) > T::zero() {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
             self.hold_on_stop(&mut end, side2);
             end.contact = Contact::OnStop(side2);
             let acc = self.consistent_acceleration(&end)?;
@@ -534,8 +666,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// The mass matrix M(q) of a state.
     pub(crate) fn mass_matrix(&self, s: &State<T, D>, contact: Contact) -> SMatrix<T, D, D> {
         let z = T::zero();
-        let ch = Chain { c_q: z, c_v: z, c_m: T::one() };
-        self.assemble(&s.q, &s.v, &s.a, self.effective_gravity(s.base_accel), &ch, contact).1
+        let ch = Chain {
+            c_q: z,
+            c_v: z,
+            c_m: T::one(),
+        };
+        self.assemble(
+            &s.q,
+            &s.v,
+            &s.a,
+            self.effective_gravity(s.base_accel),
+            &ch,
+            contact,
+        )
+        .1
     }
 
     /// Stop impact (MODEL.md, MODEL-DERIVATION §6): projects the ball onto the stop, applies the
@@ -572,8 +716,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             let m = if ball.impact_model == ImpactModel::OverStep {
                 let i = &self.params.integrator;
                 let h = i.step;
-                let ch = Chain { c_q: i.beta * h * h, c_v: i.gamma * h, c_m: T::one() };
-                self.assemble(&s.q, &s.v, &s.a, self.effective_gravity(s.base_accel), &ch, Contact::Off).1
+                let ch = Chain {
+                    c_q: i.beta * h * h,
+                    c_v: i.gamma * h,
+                    c_m: T::one(),
+                };
+                self.assemble(
+                    &s.q,
+                    &s.v,
+                    &s.a,
+                    self.effective_gravity(s.base_accel),
+                    &ch,
+                    Contact::Off,
+                )
+                .1
             } else {
                 self.mass_matrix(s, Contact::Off)
             };
@@ -628,14 +784,36 @@ mod tests {
             q[4 * N] = -2.5;
             v[4 * N] = -40.0;
         }
-        let ch = Chain { c_q: 0.36 * 9e-6, c_v: 0.7 * 3e-3, c_m: 1.0 };
+        let ch = Chain {
+            c_q: 0.36 * 9e-6,
+            c_v: 0.7 * 3e-3,
+            c_m: 1.0,
+        };
         let (_, jac, _) = m.assemble(&q, &v, &a, 9.0, &ch, contact);
         for j in 0..D {
             let h = 1e-3;
             let mut e = SVector::<f64, D>::zeros();
             e[j] = h;
-            let rp = m.assemble(&(q + e * ch.c_q), &(v + e * ch.c_v), &(a + e), 9.0, &ch, contact).0;
-            let rm = m.assemble(&(q - e * ch.c_q), &(v - e * ch.c_v), &(a - e), 9.0, &ch, contact).0;
+            let rp = m
+                .assemble(
+                    &(q + e * ch.c_q),
+                    &(v + e * ch.c_v),
+                    &(a + e),
+                    9.0,
+                    &ch,
+                    contact,
+                )
+                .0;
+            let rm = m
+                .assemble(
+                    &(q - e * ch.c_q),
+                    &(v - e * ch.c_v),
+                    &(a - e),
+                    9.0,
+                    &ch,
+                    contact,
+                )
+                .0;
             let fd = (rp - rm) / (2.0 * h);
             for i in 0..D {
                 assert!(

@@ -73,22 +73,71 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let z = SVector::<T, D>::zeros();
         let g = self.params.gravity;
         let zero = T::zero();
-        let (_, m, _) =
-            self.assemble(&self.equilibrium, &z, &z, g, &Chain { c_q: zero, c_v: zero, c_m: T::one() }, Contact::Off);
-        let (_, k, _) =
-            self.assemble(&self.equilibrium, &z, &z, g, &Chain { c_q: T::one(), c_v: zero, c_m: zero }, Contact::Off);
+        let (_, m, _) = self.assemble(
+            &self.equilibrium,
+            &z,
+            &z,
+            g,
+            &Chain {
+                c_q: zero,
+                c_v: zero,
+                c_m: T::one(),
+            },
+            Contact::Off,
+        );
+        let (_, k, _) = self.assemble(
+            &self.equilibrium,
+            &z,
+            &z,
+            g,
+            &Chain {
+                c_q: T::one(),
+                c_v: zero,
+                c_m: zero,
+            },
+            Contact::Off,
+        );
         let half = lit::<T>(0.5);
         ((m + m.transpose()) * half, (k + k.transpose()) * half)
     }
 
     /// Natural frequencies about the static equilibrium, ascending \[Hz\].
+    ///
+    /// When `K` is positive definite (a stable equilibrium) the eigenvalues are taken from
+    /// `L_K⁻¹ M L_K⁻ᵀ` (`K = L_K L_Kᵀ`), whose largest eigenvalues 1/ω² are the lowest modes:
+    /// their relative accuracy is then that of the scalar, whatever the spread to the axial
+    /// modes (10¹⁰ and more in ω²). Otherwise (zero gravity, an unstable state) the direct form
+    /// is used, which resolves the low modes only to about ε·ω²_max.
     pub fn natural_frequencies(&self) -> Result<SVector<T, D>, Error> {
         let (m, k) = self.linearized();
-        let l = m.cholesky().ok_or(Error::Singular)?.l();
-        let x = l.solve_lower_triangular(&k).ok_or(Error::Singular)?;
-        let a = l.solve_lower_triangular(&x.transpose()).ok_or(Error::Singular)?;
-        let a = (a + a.transpose()) * lit::<T>(0.5);
-        let ev = symmetric_eigenvalues(a);
-        Ok(ev.map(|l| l.max(T::zero()).sqrt() / T::two_pi()))
+        let omega2 = match Self::inverse_form(&m, &k) {
+            Some(ev) => ev,
+            None => {
+                let l = m.cholesky().ok_or(Error::Singular)?.l();
+                let x = l.solve_lower_triangular(&k).ok_or(Error::Singular)?;
+                let a = l
+                    .solve_lower_triangular(&x.transpose())
+                    .ok_or(Error::Singular)?;
+                symmetric_eigenvalues((a + a.transpose()) * lit::<T>(0.5))
+            }
+        };
+        Ok(omega2.map(|l| l.max(T::zero()).sqrt() / T::two_pi()))
+    }
+
+    /// ω² from the inverse problem, ascending, if K is positive definite.
+    fn inverse_form(m: &SMatrix<T, D, D>, k: &SMatrix<T, D, D>) -> Option<SVector<T, D>> {
+        let l = k.cholesky()?.l();
+        let x = l.solve_lower_triangular(m)?;
+        let a = l.solve_lower_triangular(&x.transpose())?;
+        let mu = symmetric_eigenvalues((a + a.transpose()) * lit::<T>(0.5));
+        if mu.iter().any(|v| !(*v > T::zero())) {
+            return None;
+        }
+        // μ ascending ⇒ ω² = 1/μ descending: reverse.
+        let mut out = SVector::<T, D>::zeros();
+        for (o, v) in out.iter_mut().zip(mu.iter().rev()) {
+            *o = T::one() / *v;
+        }
+        Some(out)
     }
 }

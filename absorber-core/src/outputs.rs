@@ -50,6 +50,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
 
     /// Static tip deflection of the equilibrium the run started from \[m\].
     pub fn static_tip_deflection(&self) -> T {
-        self.equilibrium.get(4 * N - 3).copied().unwrap_or(T::zero())
+        self.equilibrium
+            .get(4 * N - 3)
+            .copied()
+            .unwrap_or(T::zero())
     }
 }

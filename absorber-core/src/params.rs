@@ -114,7 +114,9 @@ pub struct Damping<T> {
 impl<T: Real> Damping<T> {
     /// The coefficient that gives damping ratio `zeta` at `frequency_hz`.
     pub fn from_ratio(zeta: T, frequency_hz: T) -> Self {
-        Self { stiffness_proportional: lit::<T>(2.0) * zeta / (T::two_pi() * frequency_hz) }
+        Self {
+            stiffness_proportional: lit::<T>(2.0) * zeta / (T::two_pi() * frequency_hz),
+        }
     }
 }
 
@@ -145,7 +147,11 @@ impl<T: Real> Default for Params<T> {
                 modulus: lit(200e9),
                 inertia: lit(8.47e-12),
             },
-            tip: TipParams { mass: lit(0.1154), inertia: lit(1.871e-5), offset: lit(0.0204) },
+            tip: TipParams {
+                mass: lit(0.1154),
+                inertia: lit(1.871e-5),
+                offset: lit(0.0204),
+            },
             ball: BallParams {
                 mass: lit(0.014),
                 inertia: lit(3.15e-7),
@@ -164,7 +170,9 @@ impl<T: Real> Default for Params<T> {
                 tolerance: lit(1e-5),
                 max_iterations: 100,
             },
-            damping: Damping { stiffness_proportional: T::zero() },
+            damping: Damping {
+                stiffness_proportional: T::zero(),
+            },
             gravity: lit(9.81),
         }
     }
@@ -172,9 +180,15 @@ impl<T: Real> Default for Params<T> {
 
 fn positive<T: Real>(x: T, field: &'static str) -> Result<(), Error> {
     if !x.is_finite() {
-        Err(Error::InvalidParameter { field, reason: "must be finite" })
+        Err(Error::InvalidParameter {
+            field,
+            reason: "must be finite",
+        })
     } else if x <= T::zero() {
-        Err(Error::InvalidParameter { field, reason: "must be positive" })
+        Err(Error::InvalidParameter {
+            field,
+            reason: "must be positive",
+        })
     } else {
         Ok(())
     }
@@ -182,9 +196,15 @@ fn positive<T: Real>(x: T, field: &'static str) -> Result<(), Error> {
 
 fn non_negative<T: Real>(x: T, field: &'static str) -> Result<(), Error> {
     if !x.is_finite() {
-        Err(Error::InvalidParameter { field, reason: "must be finite" })
+        Err(Error::InvalidParameter {
+            field,
+            reason: "must be finite",
+        })
     } else if x < T::zero() {
-        Err(Error::InvalidParameter { field, reason: "must not be negative" })
+        Err(Error::InvalidParameter {
+            field,
+            reason: "must not be negative",
+        })
     } else {
         Ok(())
     }
@@ -218,15 +238,24 @@ impl<T: Real> Params<T> {
             }
             positive(bl.stop_angle, "ball.stop_angle")?;
             if bl.stop_angle >= T::pi() {
-                return Err(Error::InvalidParameter { field: "ball.stop_angle", reason: "must be below pi" });
+                return Err(Error::InvalidParameter {
+                    field: "ball.stop_angle",
+                    reason: "must be below pi",
+                });
             }
             non_negative(bl.restitution, "ball.restitution")?;
             if bl.restitution > T::one() {
-                return Err(Error::InvalidParameter { field: "ball.restitution", reason: "must be at most 1" });
+                return Err(Error::InvalidParameter {
+                    field: "ball.restitution",
+                    reason: "must be at most 1",
+                });
             }
             non_negative(bl.stick_speed, "ball.stick_speed")?;
             if !bl.initial_angle.is_finite() {
-                return Err(Error::InvalidParameter { field: "ball.initial_angle", reason: "must be finite" });
+                return Err(Error::InvalidParameter {
+                    field: "ball.initial_angle",
+                    reason: "must be finite",
+                });
             }
             if bl.initial_angle.abs() >= bl.stop_angle {
                 return Err(Error::InvalidParameter {
@@ -253,11 +282,20 @@ impl<T: Real> Params<T> {
         positive(i.step, "integrator.step")?;
         positive(i.tolerance, "integrator.tolerance")?;
         if i.max_iterations == 0 {
-            return Err(Error::InvalidParameter { field: "integrator.max_iterations", reason: "must be at least 1" });
+            return Err(Error::InvalidParameter {
+                field: "integrator.max_iterations",
+                reason: "must be at least 1",
+            });
         }
-        non_negative(self.damping.stiffness_proportional, "damping.stiffness_proportional")?;
+        non_negative(
+            self.damping.stiffness_proportional,
+            "damping.stiffness_proportional",
+        )?;
         if !self.gravity.is_finite() {
-            return Err(Error::InvalidParameter { field: "gravity", reason: "must be finite" });
+            return Err(Error::InvalidParameter {
+                field: "gravity",
+                reason: "must be finite",
+            });
         }
         Ok(())
     }

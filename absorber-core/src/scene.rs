@@ -24,7 +24,11 @@ pub trait Scene: Copy + Default + 'static {
     /// The ±stop angle is enforced (free ball only).
     const STOPS: bool;
     /// Unknowns the scene adds after the 4N beam coordinates.
-    const EXTRA_DOFS: usize = if matches!(Self::BALL, BallKind::Free) { 1 } else { 0 };
+    const EXTRA_DOFS: usize = if matches!(Self::BALL, BallKind::Free) {
+        1
+    } else {
+        0
+    };
     /// Short name for reports.
     const NAME: &'static str;
 }

@@ -74,7 +74,11 @@ impl<T: Real> TipInertia<T> {
     /// Inertia data for a scene with (`has_tip`, `ball`).
     pub fn new(p: &Params<T>, has_tip: bool, ball: BallKind) -> Self {
         let zero = T::zero();
-        let (mt, jt, d) = if has_tip { (p.tip.mass, p.tip.inertia, p.tip.offset) } else { (zero, zero, zero) };
+        let (mt, jt, d) = if has_tip {
+            (p.tip.mass, p.tip.inertia, p.tip.offset)
+        } else {
+            (zero, zero, zero)
+        };
         let mut s = Self {
             total_mass: mt,
             tip_moment: mt * d,
@@ -141,7 +145,11 @@ fn psi_kinematics<T: Real>(x: &LocalState<T>, ch: &Chain<T>) -> Psi<T> {
             x.v.get(k).copied().unwrap_or(T::zero()),
             x.a.get(k).copied().unwrap_or(T::zero()),
         );
-        (D5::variable(q, k, ch.c_q), D5::variable(v, k, ch.c_v), D5::variable(a, k, ch.c_m))
+        (
+            D5::variable(q, k, ch.c_q),
+            D5::variable(v, k, ch.c_v),
+            D5::variable(a, k, ch.c_m),
+        )
     };
     let (u3, v3, a3dd) = var(2);
     let (a4, v4, a4dd) = var(3);
@@ -152,20 +160,40 @@ fn psi_kinematics<T: Real>(x: &LocalState<T>, ch: &Chain<T>) -> Psi<T> {
     let rate = jx * v3 + jy * v4;
     let gamma = (rate * (a3 * v3 + a4 * v4) / s2).scale(lit(-2.0));
     let accel = jx * a3dd + jy * a4dd + gamma;
-    Psi { psi: a4.atan2(a3), rate, accel, jx, jy }
+    Psi {
+        psi: a4.atan2(a3),
+        rate,
+        accel,
+        jx,
+        jy,
+    }
 }
 
 /// Tip rotation ψ and rate ψ̇ (plain values) from the local state.
 pub fn psi_and_rate<T: Real>(x: &LocalState<T>) -> (T, T) {
     let z = T::zero();
-    let p = psi_kinematics(x, &Chain { c_q: z, c_v: z, c_m: z });
+    let p = psi_kinematics(
+        x,
+        &Chain {
+            c_q: z,
+            c_v: z,
+            c_m: z,
+        },
+    );
     (p.psi.re, p.rate.re)
 }
 
 /// Tip rotation ψ, rate and acceleration (plain values).
 pub fn psi_all<T: Real>(x: &LocalState<T>) -> (T, T, T) {
     let z = T::zero();
-    let p = psi_kinematics(x, &Chain { c_q: z, c_v: z, c_m: z });
+    let p = psi_kinematics(
+        x,
+        &Chain {
+            c_q: z,
+            c_v: z,
+            c_m: z,
+        },
+    );
     (p.psi.re, p.rate.re, p.accel.re)
 }
 
@@ -208,9 +236,12 @@ pub fn residual<T: Real>(
     let (s_psi, c_psi) = (ps.psi.sin(), ps.psi.cos());
     let rate2 = ps.rate * ps.rate;
 
-    let mut e_x = xdd.scale(inertia.total_mass) + (c_psi * ps.accel - s_psi * rate2).scale(inertia.tip_moment);
-    let mut e_y = ydd_g.scale(inertia.total_mass) + (s_psi * ps.accel + c_psi * rate2).scale(inertia.tip_moment);
-    let mut e_psi = (c_psi * xdd + s_psi * ydd_g).scale(inertia.tip_moment) + ps.accel.scale(inertia.j_psi);
+    let mut e_x = xdd.scale(inertia.total_mass)
+        + (c_psi * ps.accel - s_psi * rate2).scale(inertia.tip_moment);
+    let mut e_y = ydd_g.scale(inertia.total_mass)
+        + (s_psi * ps.accel + c_psi * rate2).scale(inertia.tip_moment);
+    let mut e_psi =
+        (c_psi * xdd + s_psi * ydd_g).scale(inertia.tip_moment) + ps.accel.scale(inertia.j_psi);
     let mut row4 = D5::constant(T::zero());
     let mut contact = T::zero();
 
