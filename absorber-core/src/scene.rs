@@ -3,6 +3,26 @@
 //! A scene is a zero-sized marker type. Its associated constants are known to the compiler, so
 //! every `if S::HAS_BALL { … }` in the model is folded away: the beam-only scene's binary holds
 //! no tip or ball code, and only [`FreeBall`] scenes have the ball angle as an unknown.
+//!
+//! The number of unknowns `D` is checked at compile time: a free ball has `4N + 1`.
+//!
+//! ```
+//! use absorber_core::{FreeBallModel, LockedBallModel, Params};
+//! assert!(FreeBallModel::<f64, 3, 13>::new(Params::default()).is_ok());
+//! assert!(LockedBallModel::<f64, 3, 12>::new(Params::default()).is_ok());
+//! ```
+//!
+//! ```compile_fail
+//! use absorber_core::{FreeBallModel, Params};
+//! // 12 unknowns cannot hold a free ball on 3 elements (4·3 + 1 = 13): rejected at build time.
+//! let _ = FreeBallModel::<f64, 3, 12>::new(Params::default());
+//! ```
+//!
+//! ```compile_fail
+//! use absorber_core::{BeamModel, Params};
+//! // A beam needs at least one element.
+//! let _ = BeamModel::<f64, 0, 0>::new(Params::default());
+//! ```
 
 /// How the ball is held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
