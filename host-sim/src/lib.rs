@@ -1,3 +1,14 @@
 //! Host tools for the absorber: full solver, scenes, sweeps, plots, reports.
 pub use absorber_core;
 pub mod sim;
+// Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
+pub mod cli;
+pub mod core_sim;
+pub mod excitation;
+pub mod fft;
+pub mod figures;
+pub mod plot;
+pub mod run;
+pub mod scene;
+pub mod sweep;
+pub mod tune;

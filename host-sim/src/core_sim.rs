@@ -1,0 +1,168 @@
+//! The embedded core behind the [`Simulator`] trait, with the scene kind, the number of elements
+//! and the scalar chosen at run time (the core fixes them at compile time: a macro instantiates
+//! every supported combination).
+
+use crate::scene::{Kind, Precision};
+use crate::sim::{Observation, Simulator};
+use absorber_core::{
+    BallParams, BeamOnly, BeamParams, Damping, Energies, Error, FreeBall, FreeBallNoStops, Impact, Integrator,
+    LockedBall, Model, Params, Real, Scene, StepReport, TipMass, TipParams,
+};
+
+/// A core model of any scene, size and scalar.
+pub struct CoreSim<T: Real, S: Scene, const N: usize, const D: usize> {
+    model: Model<T, S, N, D>,
+}
+
+fn f64_of<T: Real>(x: T) -> f64 {
+    absorber_core::scalar::to_f64(x)
+}
+
+fn energies_f64<T: Real>(e: Energies<T>) -> Energies<f64> {
+    Energies {
+        beam_strain: f64_of(e.beam_strain),
+        beam_kinetic: f64_of(e.beam_kinetic),
+        beam_potential: f64_of(e.beam_potential),
+        tip_kinetic: f64_of(e.tip_kinetic),
+        tip_potential: f64_of(e.tip_potential),
+        ball_kinetic: f64_of(e.ball_kinetic),
+        ball_potential: f64_of(e.ball_potential),
+    }
+}
+
+impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator for CoreSim<T, S, N, D> {
+    fn step(&mut self, base_accel: f64) -> Result<StepReport<f64>, Error> {
+        let r = self.model.step(absorber_core::scalar::lit(base_accel))?;
+        Ok(StepReport {
+            iterations: r.iterations,
+            increment: f64_of(r.increment),
+            impact: r.impact.map(|i| Impact {
+                time: f64_of(i.time),
+                side: i.side,
+                relative_speed: f64_of(i.relative_speed),
+                impulse: f64_of(i.impulse),
+                energy_loss: f64_of(i.energy_loss),
+                stuck: i.stuck,
+            }),
+        })
+    }
+
+    fn observe(&self) -> Observation {
+        let m = &self.model;
+        let (psi, psi_dot) = m.tip_angle();
+        let (th, thd) = m.ball_angle().map(|(a, b)| (f64_of(a), f64_of(b))).unwrap_or((f64::NAN, f64::NAN));
+        let (al, ald) = m.ball_relative_angle().map(|(a, b)| (f64_of(a), f64_of(b))).unwrap_or((f64::NAN, f64::NAN));
+        Observation {
+            time: f64_of(m.time()),
+            tip_deflection: f64_of(m.tip_deflection()),
+            tip_velocity: f64_of(m.tip_velocity()),
+            tip_angle: f64_of(psi),
+            tip_rate: f64_of(psi_dot),
+            ball_angle: th,
+            ball_rate: thd,
+            ball_relative_angle: al,
+            ball_relative_rate: ald,
+        }
+    }
+
+    fn energies(&self, base_velocity: f64, base_displacement: f64) -> Energies<f64> {
+        let lit = absorber_core::scalar::lit::<T>;
+        energies_f64(self.model.energies(lit(base_velocity), lit(base_displacement)))
+    }
+
+    fn natural_frequencies(&self) -> Result<Vec<f64>, Error> {
+        Ok(self.model.natural_frequencies()?.iter().map(|&f| f64_of(f)).collect())
+    }
+
+    fn static_tip_deflection(&self) -> f64 {
+        f64_of(self.model.static_tip_deflection())
+    }
+
+    fn solver_name(&self) -> &'static str {
+        "core"
+    }
+}
+
+/// The parameters rounded to `f32`.
+pub fn params_f32(p: &Params<f64>) -> Params<f32> {
+    let b = &p.ball;
+    Params {
+        beam: BeamParams {
+            length: p.beam.length as f32,
+            mass: p.beam.mass as f32,
+            area: p.beam.area as f32,
+            modulus: p.beam.modulus as f32,
+            inertia: p.beam.inertia as f32,
+        },
+        tip: TipParams { mass: p.tip.mass as f32, inertia: p.tip.inertia as f32, offset: p.tip.offset as f32 },
+        ball: BallParams {
+            mass: b.mass as f32,
+            inertia: b.inertia as f32,
+            radius: b.radius as f32,
+            track_radius: b.track_radius as f32,
+            stop_angle: b.stop_angle as f32,
+            restitution: b.restitution as f32,
+            stick_speed: b.stick_speed as f32,
+            initial_angle: b.initial_angle as f32,
+            impact_model: b.impact_model,
+        },
+        integrator: Integrator {
+            gamma: p.integrator.gamma as f32,
+            beta: p.integrator.beta as f32,
+            step: p.integrator.step as f32,
+            tolerance: p.integrator.tolerance as f32,
+            max_iterations: p.integrator.max_iterations,
+        },
+        damping: Damping { stiffness_proportional: p.damping.stiffness_proportional as f32 },
+        gravity: p.gravity as f32,
+    }
+}
+
+fn boxed<T: Real + Send, S: Scene + Send, const N: usize, const D: usize>(
+    params: Params<T>,
+    base_accel0: T,
+) -> Result<Box<dyn Simulator>, Error> {
+    Ok(Box::new(CoreSim { model: Model::<T, S, N, D>::at_rest(params, base_accel0)? }))
+}
+
+macro_rules! by_elements {
+    ($t:ty, $s:ty, $extra:literal, $n:expr, $p:expr, $a:expr) => {
+        match $n {
+            1 => boxed::<$t, $s, 1, { 4 + $extra }>($p, $a),
+            2 => boxed::<$t, $s, 2, { 8 + $extra }>($p, $a),
+            3 => boxed::<$t, $s, 3, { 12 + $extra }>($p, $a),
+            4 => boxed::<$t, $s, 4, { 16 + $extra }>($p, $a),
+            6 => boxed::<$t, $s, 6, { 24 + $extra }>($p, $a),
+            8 => boxed::<$t, $s, 8, { 32 + $extra }>($p, $a),
+            16 => boxed::<$t, $s, 16, { 64 + $extra }>($p, $a),
+            _ => Err(Error::InvalidParameter { field: "elements", reason: "supported: 1, 2, 3, 4, 6, 8, 16" }),
+        }
+    };
+}
+
+macro_rules! by_kind {
+    ($t:ty, $kind:expr, $n:expr, $p:expr, $a:expr) => {
+        match $kind {
+            Kind::Beam => by_elements!($t, BeamOnly, 0, $n, $p, $a),
+            Kind::Tip => by_elements!($t, TipMass, 0, $n, $p, $a),
+            Kind::Locked => by_elements!($t, LockedBall, 0, $n, $p, $a),
+            Kind::Free => by_elements!($t, FreeBall, 1, $n, $p, $a),
+            Kind::FreeNostops => by_elements!($t, FreeBallNoStops, 1, $n, $p, $a),
+        }
+    };
+}
+
+/// Builds the core model of `kind` with `elements` elements in `precision`, at rest in its
+/// static equilibrium, with the base acceleration `base_accel0` at t = 0.
+pub fn build(
+    kind: Kind,
+    elements: usize,
+    precision: Precision,
+    params: &Params<f64>,
+    base_accel0: f64,
+) -> Result<Box<dyn Simulator>, Error> {
+    match precision {
+        Precision::F64 => by_kind!(f64, kind, elements, *params, base_accel0),
+        Precision::F32 => by_kind!(f32, kind, elements, params_f32(params), base_accel0 as f32),
+    }
+}

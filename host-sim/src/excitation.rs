@@ -1,0 +1,184 @@
+//! Base excitation: harmonic, or measured acceleration from a CSV file.
+//!
+//! Everything is sampled on the step grid t_k = k h. The solver's input is the base
+//! acceleration ÿ_b(t_k) \[m/s²\]; velocity ẏ_b and displacement y_b (for the absolute tip
+//! position and the energies) are closed form for the harmonic case and integrated by the
+//! trapezoidal rule from zero for a CSV.
+
+use anyhow::{bail, Context, Result};
+use std::path::Path;
+
+/// The base motion on the step grid.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Excitation {
+    /// y_b = A sin(Ω t), ÿ_b = −A Ω² sin(Ω t), Ω = 2π f.
+    Harmonic {
+        /// Amplitude A \[m\].
+        amplitude: f64,
+        /// Frequency f \[Hz\].
+        frequency: f64,
+        /// Step h \[s\].
+        step: f64,
+    },
+    /// Measured acceleration resampled to the step h (linear interpolation).
+    Sampled {
+        /// Step h \[s\].
+        step: f64,
+        /// ÿ_b(t_k).
+        accel: Vec<f64>,
+        /// ẏ_b(t_k) (trapezoidal integral from 0).
+        velocity: Vec<f64>,
+        /// y_b(t_k) (trapezoidal integral from 0).
+        displacement: Vec<f64>,
+    },
+}
+
+/// Base state at one grid point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Base {
+    /// Acceleration \[m/s²\].
+    pub accel: f64,
+    /// Velocity \[m/s\].
+    pub velocity: f64,
+    /// Displacement \[m\].
+    pub displacement: f64,
+}
+
+impl Excitation {
+    /// Harmonic excitation.
+    pub fn harmonic(amplitude: f64, frequency: f64, step: f64) -> Self {
+        Self::Harmonic { amplitude, frequency, step }
+    }
+
+    /// Base state at grid point `k` (t = k h). A sampled excitation holds its last value.
+    pub fn at(&self, k: usize) -> Base {
+        match self {
+            Self::Harmonic { amplitude, frequency, step } => {
+                let w = std::f64::consts::TAU * frequency;
+                let (s, c) = (w * k as f64 * step).sin_cos();
+                Base { accel: -amplitude * w * w * s, velocity: amplitude * w * c, displacement: amplitude * s }
+            }
+            Self::Sampled { accel, velocity, displacement, .. } => {
+                let i = k.min(accel.len().saturating_sub(1));
+                Base {
+                    accel: accel.get(i).copied().unwrap_or(0.0),
+                    velocity: velocity.get(i).copied().unwrap_or(0.0),
+                    displacement: displacement.get(i).copied().unwrap_or(0.0),
+                }
+            }
+        }
+    }
+
+    /// Number of grid points available (`None`: unbounded).
+    pub fn len(&self) -> Option<usize> {
+        match self {
+            Self::Harmonic { .. } => None,
+            Self::Sampled { accel, .. } => Some(accel.len()),
+        }
+    }
+
+    /// Reads a CSV of `t, accel` and resamples it to the grid t_k = k h, k = 0 … `steps`
+    /// (`steps = None`: as far as the file reaches). See [`Excitation::from_csv_text`].
+    pub fn from_csv(path: &Path, step: f64, steps: Option<usize>) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read excitation CSV `{}`", path.display()))?;
+        Self::from_csv_text(&text, step, steps).with_context(|| format!("excitation CSV `{}`", path.display()))
+    }
+
+    /// Parses CSV text: two columns `t [s], accel [m/s²]`, separated by a comma (or
+    /// whitespace/semicolon); lines starting with `#` and an optional header line are skipped.
+    /// Times must be finite and strictly increasing and start at or before 0; the grid must not
+    /// extend past the last sample; the samples must be no coarser than 10 h apart (so that the
+    /// resampling does not invent the signal between them).
+    pub fn from_csv_text(text: &str, step: f64, steps: Option<usize>) -> Result<Self> {
+        let mut t = Vec::new();
+        let mut a = Vec::new();
+        for (n, line) in text.lines().enumerate() {
+            let line = line.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let cols: Vec<&str> =
+                line.split(|c: char| c == ',' || c == ';' || c.is_whitespace()).filter(|s| !s.is_empty()).collect();
+            let parsed: Option<Vec<f64>> = cols.iter().map(|c| c.parse::<f64>().ok()).collect();
+            let Some(vals) = parsed else {
+                if t.is_empty() && n == first_content_line(text) {
+                    continue; // header
+                }
+                bail!("line {}: not a number in `{line}`", n + 1);
+            };
+            if vals.len() != 2 {
+                bail!("line {}: expected 2 columns (t, accel), found {}", n + 1, vals.len());
+            }
+            let (ti, ai) = (vals[0], vals[1]);
+            if !ti.is_finite() || !ai.is_finite() {
+                bail!("line {}: value is not finite", n + 1);
+            }
+            if let Some(&prev) = t.last() {
+                if ti <= prev {
+                    bail!("line {}: time {ti} does not increase (previous {prev})", n + 1);
+                }
+                if ti - prev > 10.0 * step * (1.0 + 1e-9) {
+                    bail!("line {}: sample interval {:.6} s is coarser than 10 steps ({:.6} s)", n + 1, ti - prev, 10.0 * step);
+                }
+            }
+            t.push(ti);
+            a.push(ai);
+        }
+        if t.len() < 2 {
+            bail!("needs at least 2 samples, found {}", t.len());
+        }
+        if t[0] > 1e-12 {
+            bail!("first sample at t = {} s; must start at t = 0", t[0]);
+        }
+        let last = *t.last().unwrap_or(&0.0);
+        let available = ((last / step) * (1.0 + 1e-12)).floor() as usize;
+        let n = match steps {
+            Some(s) if s > available => {
+                bail!("covers {last} s but the run needs {} s ({s} steps of {step} s)", s as f64 * step)
+            }
+            Some(s) => s,
+            None => available,
+        };
+        let mut accel = Vec::with_capacity(n + 1);
+        let mut j = 0;
+        for k in 0..=n {
+            let tk = k as f64 * step;
+            while j + 2 < t.len() && t[j + 1] < tk {
+                j += 1;
+            }
+            let (t0, t1) = (t[j], t[j + 1]);
+            let w = ((tk - t0) / (t1 - t0)).clamp(0.0, 1.0);
+            accel.push(a[j] + w * (a[j + 1] - a[j]));
+        }
+        let mut velocity = vec![0.0; n + 1];
+        let mut displacement = vec![0.0; n + 1];
+        for k in 1..=n {
+            velocity[k] = velocity[k - 1] + 0.5 * step * (accel[k - 1] + accel[k]);
+            displacement[k] = displacement[k - 1] + 0.5 * step * (velocity[k - 1] + velocity[k]);
+        }
+        Ok(Self::Sampled { step, accel, velocity, displacement })
+    }
+}
+
+fn first_content_line(text: &str) -> usize {
+    text.lines().position(|l| !l.trim().is_empty() && !l.trim().starts_with('#')).unwrap_or(0)
+}
+
+/// The excitation of a scene, on its step grid, for `steps` steps.
+pub fn of_scene(scene: &crate::scene::Scene, steps: usize) -> Result<Excitation> {
+    use crate::scene::ExcitationType;
+    let f = &scene.file;
+    let h = f.integrator.step;
+    match f.excitation.kind {
+        ExcitationType::Harmonic => Ok(Excitation::harmonic(
+            f.excitation.amplitude.unwrap_or(0.0),
+            f.excitation.frequency.unwrap_or(1.0),
+            h,
+        )),
+        ExcitationType::Csv => {
+            let file = f.excitation.file.as_ref().context("missing `excitation.file`")?;
+            let path = if file.is_absolute() { file.clone() } else { scene.base_dir.join(file) };
+            Excitation::from_csv(&path, h, Some(steps))
+        }
+    }
+}

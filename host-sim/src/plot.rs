@@ -1,0 +1,153 @@
+//! PNG plots with plotters. Text uses DejaVu Sans embedded in the binary (the `dejavu` crate
+//! through plotters' `ab_glyph` backend), so no system fonts or fontconfig are needed.
+
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+use std::path::Path;
+use std::sync::Once;
+
+/// Font family name registered for all text.
+const FONT: &str = "sans-serif";
+
+fn fonts() {
+    static INIT: Once = Once::new();
+    INIT.call_once(|| {
+        // The font bytes are a valid TTF shipped by the crate; failure would only lose labels.
+        let _ = register_font(FONT, FontStyle::Normal, dejavu::sans::regular());
+        let _ = register_font(FONT, FontStyle::Bold, dejavu::sans::bold());
+    });
+}
+
+/// One curve.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Legend text (empty: no legend entry).
+    pub label: String,
+    /// Points (non-finite ones are skipped).
+    pub points: Vec<(f64, f64)>,
+    /// Draw markers instead of a line (for sweeps).
+    pub markers: bool,
+}
+
+impl Series {
+    /// A line.
+    pub fn line(label: &str, points: Vec<(f64, f64)>) -> Self {
+        Self { label: label.into(), points, markers: false }
+    }
+    /// Line with markers.
+    pub fn marked(label: &str, points: Vec<(f64, f64)>) -> Self {
+        Self { label: label.into(), points, markers: true }
+    }
+}
+
+/// One chart.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    /// Title.
+    pub title: String,
+    /// X axis label.
+    pub x: String,
+    /// Y axis label.
+    pub y: String,
+    /// Curves.
+    pub series: Vec<Series>,
+}
+
+impl Panel {
+    /// A chart.
+    pub fn new(title: &str, x: &str, y: &str, series: Vec<Series>) -> Self {
+        Self { title: title.into(), x: x.into(), y: y.into(), series }
+    }
+}
+
+const COLORS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if lo > hi {
+        return (-1.0, 1.0);
+    }
+    let pad = if hi > lo { 0.05 * (hi - lo) } else { 0.5 * lo.abs().max(1e-12) };
+    (lo - pad, hi + pad)
+}
+
+/// Draws `panels` on a grid of `rows × cols` into a PNG of `width × height` pixels.
+pub fn render(path: &Path, title: &str, panels: &[Panel], rows: usize, cols: usize, size: (u32, u32)) -> Result<()> {
+    fonts();
+    let err = |e: &dyn std::fmt::Display| anyhow!("plot `{}`: {e}", path.display());
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let root = root.titled(title, (FONT, 22).into_font().style(FontStyle::Bold)).map_err(|e| err(&e))?;
+    let areas = root.split_evenly((rows, cols));
+    for (panel, area) in panels.iter().zip(areas.iter()) {
+        let (x0, x1) = range(panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
+        let (y0, y1) = range(panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
+        let mut chart = ChartBuilder::on(area)
+            .caption(&panel.title, (FONT, 16))
+            .margin(8)
+            .x_label_area_size(36)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| err(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc(panel.x.as_str())
+            .y_desc(panel.y.as_str())
+            .label_style((FONT, 12))
+            .axis_desc_style((FONT, 13))
+            .y_label_formatter(&|v| format_tick(*v))
+            .x_label_formatter(&|v| format_tick(*v))
+            .draw()
+            .map_err(|e| err(&e))?;
+        let mut legend = false;
+        for (i, s) in panel.series.iter().enumerate() {
+            let color = COLORS[i % COLORS.len()];
+            let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
+            let anno = chart.draw_series(LineSeries::new(pts.clone(), color.stroke_width(1))).map_err(|e| err(&e))?;
+            if !s.label.is_empty() {
+                legend = true;
+                anno.label(s.label.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            }
+            if s.markers {
+                chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| err(&e))?;
+            }
+        }
+        if legend {
+            chart
+                .configure_series_labels()
+                .label_font((FONT, 12))
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(|e| err(&e))?;
+        }
+    }
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+fn format_tick(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e4).contains(&a) {
+        format!("{v:.2e}")
+    } else {
+        let s = format!("{v:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}

@@ -1,0 +1,206 @@
+//! Running a scene: the solver chosen by the scene, the excitation on the step grid, one
+//! [`Row`] per step, CSV output.
+
+use crate::excitation::{self, Excitation};
+use crate::scene::{Scene, Solver};
+use crate::sim::Simulator;
+use anyhow::{anyhow, bail, Result};
+use std::io::Write;
+
+/// Builds the scene's solver at rest in the static equilibrium with input `base_accel0` at t = 0.
+pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simulator>> {
+    let f = &scene.file;
+    let params = scene.params()?;
+    match f.solver {
+        Solver::Core => crate::core_sim::build(f.kind, f.elements, f.precision, &params, base_accel0)
+            .map_err(|e| crate::scene::map_core_error(e, scene)),
+        // Wire the full solver here once `host_sim::full` provides a constructor.
+        Solver::Full => bail!("full solver not built yet (use --solver core)"),
+    }
+}
+
+/// One output sample. SI units, angles in radians.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    /// Time \[s\].
+    pub t: f64,
+    /// Base displacement y_b \[m\].
+    pub base_y: f64,
+    /// Absolute vertical position of the beam end, y_b + deflection \[m\].
+    pub tip_y: f64,
+    /// Deflection of the beam end relative to the base (static sag included) \[m\].
+    pub tip_deflection: f64,
+    /// Tip mass rotation ψ \[rad\].
+    pub tip_angle: f64,
+    /// Ball orbit angle θ from the downward vertical \[rad\] (NaN without a ball).
+    pub ball_angle: f64,
+    /// Ball angle relative to the housing α = θ − ψ \[rad\].
+    pub ball_rel_angle: f64,
+    /// Energies \[J\] with absolute velocities (base velocity included).
+    pub energies: absorber_core::Energies<f64>,
+    /// Newton iterations of the step that ended here (0 at t = 0).
+    pub iterations: u32,
+    /// A stop impact happened in the step that ended here.
+    pub impact: bool,
+    /// Base acceleration ÿ_b \[m/s²\].
+    pub base_accel: f64,
+    /// Relative tip velocity ẏ \[m/s\].
+    pub tip_velocity: f64,
+    /// ψ̇ \[rad/s\].
+    pub tip_rate: f64,
+    /// θ̇ \[rad/s\].
+    pub ball_rate: f64,
+    /// α̇ \[rad/s\].
+    pub ball_rel_rate: f64,
+    /// Ball spin angle φ = ψ − (ρ/r_b) α \[rad\] (paper eq. 28; 0 in the static state).
+    pub ball_spin: f64,
+    /// φ̇ \[rad/s\].
+    pub ball_spin_rate: f64,
+}
+
+/// The CSV header (also documents the columns).
+pub const CSV_HEADER: &str = "\
+# host-sim run: one row per output step. SI units, angles in rad.
+# t [s]; base_y: base displacement y_b [m]; tip_y: absolute vertical position of the beam end (y_b + deflection) [m];
+# tip_deflection: beam end relative to the base, static sag included [m]; tip_angle: tip mass rotation psi [rad];
+# ball_angle: ball orbit angle theta from the downward vertical [rad]; ball_rel_angle: theta - psi [rad];
+# beam_strain, beam_kinetic, beam_potential, tip_kinetic, tip_potential, ball_kinetic, ball_potential [J]
+#   (kinetic with absolute velocities, potentials as changes from the static state plus the base displacement);
+# iterations: Newton iterations of the step; impact: 1 if the ball hit a stop in the step;
+# base_accel [m/s^2]; tip_velocity [m/s]; tip_rate, ball_rate, ball_rel_rate [rad/s];
+# ball_spin: phi = psi - (rho/r_b)(theta - psi) [rad]; ball_spin_rate [rad/s]
+t,base_y,tip_y,tip_deflection,tip_angle,ball_angle,ball_rel_angle,beam_strain,beam_kinetic,beam_potential,tip_kinetic,tip_potential,ball_kinetic,ball_potential,iterations,impact,base_accel,tip_velocity,tip_rate,ball_rate,ball_rel_rate,ball_spin,ball_spin_rate";
+
+impl Row {
+    /// The row as a CSV line (no newline).
+    pub fn csv(&self) -> String {
+        let e = &self.energies;
+        let v = [
+            self.t,
+            self.base_y,
+            self.tip_y,
+            self.tip_deflection,
+            self.tip_angle,
+            self.ball_angle,
+            self.ball_rel_angle,
+            e.beam_strain,
+            e.beam_kinetic,
+            e.beam_potential,
+            e.tip_kinetic,
+            e.tip_potential,
+            e.ball_kinetic,
+            e.ball_potential,
+        ];
+        let mut s: String = v.iter().map(|x| format!("{x:.9e}")).collect::<Vec<_>>().join(",");
+        s.push_str(&format!(",{},{}", self.iterations, u8::from(self.impact)));
+        for x in [
+            self.base_accel,
+            self.tip_velocity,
+            self.tip_rate,
+            self.ball_rate,
+            self.ball_rel_rate,
+            self.ball_spin,
+            self.ball_spin_rate,
+        ] {
+            s.push_str(&format!(",{x:.9e}"));
+        }
+        s
+    }
+}
+
+/// Steps a scene through `steps` steps, calling `sink` with the initial row and after every
+/// step. `progress(k)` is called every 500 steps. A failed step ends the run with an error
+/// naming the time.
+pub fn simulate(
+    scene: &Scene,
+    exc: &Excitation,
+    steps: usize,
+    mut sink: impl FnMut(&Row),
+    mut progress: impl FnMut(usize),
+) -> Result<()> {
+    let params = scene.params()?;
+    let spin_ratio = params.ball.path_radius() / params.ball.radius;
+    let b0 = exc.at(0);
+    let mut sim = build_simulator(scene, b0.accel)?;
+    let row = |sim: &dyn Simulator, k: usize, iterations: u32, impact: bool| {
+        let o = sim.observe();
+        let b = exc.at(k);
+        Row {
+            t: o.time,
+            base_y: b.displacement,
+            tip_y: b.displacement + o.tip_deflection,
+            tip_deflection: o.tip_deflection,
+            tip_angle: o.tip_angle,
+            ball_angle: o.ball_angle,
+            ball_rel_angle: o.ball_relative_angle,
+            energies: sim.energies(b.velocity, b.displacement),
+            iterations,
+            impact,
+            base_accel: b.accel,
+            tip_velocity: o.tip_velocity,
+            tip_rate: o.tip_rate,
+            ball_rate: o.ball_rate,
+            ball_rel_rate: o.ball_relative_rate,
+            ball_spin: o.tip_angle - spin_ratio * o.ball_relative_angle,
+            ball_spin_rate: o.tip_rate - spin_ratio * o.ball_relative_rate,
+        }
+    };
+    sink(&row(sim.as_ref(), 0, 0, false));
+    for k in 1..=steps {
+        let b = exc.at(k);
+        let report = sim.step(b.accel).map_err(|e| {
+            anyhow!("step {k} (t = {:.4} s) failed: {}", k as f64 * scene.file.integrator.step, scene_error(e, scene))
+        })?;
+        sink(&row(sim.as_ref(), k, report.iterations, report.impact.is_some()));
+        if k % 500 == 0 {
+            progress(k);
+        }
+    }
+    progress(steps);
+    Ok(())
+}
+
+fn scene_error(e: absorber_core::Error, scene: &Scene) -> anyhow::Error {
+    crate::scene::map_core_error(e, scene)
+}
+
+/// The excitation of a scene for its duration.
+pub fn scene_excitation(scene: &Scene) -> Result<Excitation> {
+    excitation::of_scene(scene, scene.steps())
+}
+
+/// Runs a scene for its duration and keeps every row.
+pub fn run_rows(scene: &Scene, progress: impl FnMut(usize)) -> Result<Vec<Row>> {
+    let exc = scene_excitation(scene)?;
+    let steps = scene.steps();
+    let mut rows = Vec::with_capacity(steps + 1);
+    simulate(scene, &exc, steps, |r| rows.push(*r), progress)?;
+    Ok(rows)
+}
+
+/// Writes rows (every `every`-th) as CSV with the documented header.
+pub fn write_csv(path: &std::path::Path, rows: &[Row], every: usize) -> Result<()> {
+    let file = std::fs::File::create(path).map_err(|e| anyhow!("cannot create `{}`: {e}", path.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    writeln!(w, "{CSV_HEADER}")?;
+    for r in rows.iter().step_by(every.max(1)) {
+        writeln!(w, "{}", r.csv())?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// Half the peak-to-peak value of `x` over the samples with t ≥ `from` (NaN if none).
+pub fn half_range(rows: &[Row], from: f64, x: impl Fn(&Row) -> f64) -> f64 {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for r in rows.iter().filter(|r| r.t >= from) {
+        let v = x(r);
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if lo <= hi {
+        0.5 * (hi - lo)
+    } else {
+        f64::NAN
+    }
+}

@@ -1,0 +1,575 @@
+//! Scene files (TOML): every parameter of the model, the scene kind, mesh, precision,
+//! excitation, integrator, solver, duration and outputs.
+//!
+//! Every section and key is optional; what is left out takes the paper's value (Table 1, the
+//! built-in `paper` scene). Unknown keys are errors naming the key; bad values are errors naming
+//! the field. Units are SI; angles in a scene file are in degrees (`*_deg`).
+//!
+//! ```toml
+//! name = "paper"
+//! kind = "free"          # beam | tip | locked | free | free-nostops
+//! elements = 3           # 1, 2, 3, 4, 6, 8 or 16
+//! precision = "f64"      # f32 | f64
+//! solver = "core"        # core | full
+//! duration = 60.0        # s
+//! gravity = 9.81         # m/s², along −y
+//!
+//! [beam]       # length [m], mass [kg], area [m²], modulus [Pa], inertia [m⁴]
+//! [tip]        # mass [kg], inertia [kg·m²], offset [m] (u_t2, centre below the beam end)
+//! [ball]       # mass, inertia, radius, track_radius, stop_angle_deg, restitution,
+//!              # stick_speed [rad/s], initial_angle_deg, impact_model = "over-step" | "instantaneous"
+//! [damping]    # stiffness_proportional [s], or ratio [-] at frequency [Hz]
+//! [integrator] # gamma, beta, step [s], tolerance, max_iterations
+//! [excitation] # type = "harmonic", amplitude [m], frequency [Hz]
+//!              # or type = "csv", file = "base.csv" (columns t [s], accel [m/s²])
+//! [outputs]    # directory, plots = ["time", "fft", "phase", "energy"], transient [s], every
+//! ```
+
+use absorber_core::{BallParams, BeamParams, Damping, ImpactModel, Integrator, Params, TipParams};
+use anyhow::{anyhow, bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Which bodies the scene contains (the core's compile-time scenes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kind {
+    /// The cantilever alone.
+    Beam,
+    /// Cantilever + tip mass.
+    Tip,
+    /// Cantilever + tip mass + ball locked in the housing (passive absorber).
+    Locked,
+    /// Cantilever + tip mass + free ball with stops (the paper's absorber).
+    Free,
+    /// Free ball without stops.
+    FreeNostops,
+}
+
+impl Kind {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Beam => "beam",
+            Kind::Tip => "tip",
+            Kind::Locked => "locked",
+            Kind::Free => "free",
+            Kind::FreeNostops => "free-nostops",
+        }
+    }
+    /// The scene has a ball.
+    pub fn has_ball(self) -> bool {
+        matches!(self, Kind::Locked | Kind::Free | Kind::FreeNostops)
+    }
+    /// The scene has a free ball (one more unknown).
+    pub fn free_ball(self) -> bool {
+        matches!(self, Kind::Free | Kind::FreeNostops)
+    }
+}
+
+/// Scalar of the solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Precision {
+    /// Single precision (as on the Cortex-M4F).
+    F32,
+    /// Double precision.
+    F64,
+}
+
+/// Which solver runs the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Solver {
+    /// The embedded reduced model (`absorber-core`).
+    #[default]
+    Core,
+    /// The full multibody solver (`host_sim::full`).
+    Full,
+}
+
+impl Solver {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Solver::Core => "core",
+            Solver::Full => "full",
+        }
+    }
+}
+
+/// Element counts the core is compiled for.
+pub const ELEMENTS: [usize; 7] = [1, 2, 3, 4, 6, 8, 16];
+
+/// `[beam]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BeamSection {
+    /// Total length L \[m\].
+    pub length: f64,
+    /// Total mass \[kg\].
+    pub mass: f64,
+    /// Cross-section area \[m²\].
+    pub area: f64,
+    /// Young's modulus \[Pa\].
+    pub modulus: f64,
+    /// Second moment of area \[m⁴\].
+    pub inertia: f64,
+}
+
+/// `[tip]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TipSection {
+    /// Mass m_t \[kg\].
+    pub mass: f64,
+    /// Moment of inertia J_t \[kg·m²\].
+    pub inertia: f64,
+    /// Distance u_t2 from the tip mass centre up to the beam end \[m\].
+    pub offset: f64,
+}
+
+/// How the stop impulse is spread (scene-file spelling of [`ImpactModel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ImpactSetting {
+    /// Impulse spread over the step (default).
+    OverStep,
+    /// Instantaneous impact of the discrete model.
+    Instantaneous,
+}
+
+/// `[ball]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BallSection {
+    /// Mass m_b \[kg\].
+    pub mass: f64,
+    /// Moment of inertia J_b \[kg·m²\].
+    pub inertia: f64,
+    /// Ball radius r_b \[m\].
+    pub radius: f64,
+    /// Track radius R \[m\].
+    pub track_radius: f64,
+    /// Stop angle \[deg\].
+    pub stop_angle_deg: f64,
+    /// Coefficient of restitution at the stops \[-\].
+    pub restitution: f64,
+    /// Below this relative speed a stop impact is plastic \[rad/s\].
+    pub stick_speed: f64,
+    /// Initial ball angle from the downward vertical \[deg\].
+    pub initial_angle_deg: f64,
+    /// Impact model.
+    pub impact_model: ImpactSetting,
+}
+
+/// `[damping]`: stiffness-proportional structural damping, off by default.
+#[derive(Clone, Debug, PartialEq, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DampingSection {
+    /// Coefficient c in C = c K \[s\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness_proportional: Option<f64>,
+    /// Damping ratio ζ at `frequency` (alternative to `stiffness_proportional`) \[-\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ratio: Option<f64>,
+    /// Frequency at which `ratio` holds \[Hz\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frequency: Option<f64>,
+}
+
+/// `[integrator]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IntegratorSection {
+    /// Newmark γ.
+    pub gamma: f64,
+    /// Newmark β.
+    pub beta: f64,
+    /// Time step h \[s\].
+    pub step: f64,
+    /// Newton tolerance.
+    pub tolerance: f64,
+    /// Newton iteration budget.
+    pub max_iterations: u32,
+}
+
+/// Kind of base excitation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ExcitationType {
+    /// y_b = A sin(2π f t).
+    Harmonic,
+    /// Measured base acceleration from a CSV file.
+    Csv,
+}
+
+/// `[excitation]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExcitationSection {
+    /// `harmonic` or `csv`.
+    #[serde(rename = "type")]
+    pub kind: ExcitationType,
+    /// Base displacement amplitude A \[m\] (harmonic).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub amplitude: Option<f64>,
+    /// Frequency f \[Hz\] (harmonic).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frequency: Option<f64>,
+    /// CSV file of `t, accel` (csv), relative to the scene file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<PathBuf>,
+}
+
+/// `[outputs]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputsSection {
+    /// Directory for CSV and plots (relative to the working directory).
+    pub directory: PathBuf,
+    /// Which plots: `time`, `fft`, `phase`, `energy`.
+    pub plots: Vec<Plot>,
+    /// Transient left out of the FFT and the steady-state amplitudes \[s\].
+    pub transient: f64,
+    /// Write every n-th step to the CSV.
+    pub every: usize,
+}
+
+/// A plot of `run`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Plot {
+    /// Time histories of the tip and the ball (paper Figs. 8, 11, 16, 20–23).
+    Time,
+    /// FFT of the tip and the ball after the transient (Figs. 11, 16, 22).
+    Fft,
+    /// Phase planes y–ẏ, φ–φ̇, θ–ψ (Figs. 9, 12, 14, 15).
+    Phase,
+    /// Energy curves (Figs. 17–19).
+    Energy,
+}
+
+/// A scene as written in a file.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SceneFile {
+    /// Name for reports.
+    pub name: String,
+    /// Bodies.
+    pub kind: Kind,
+    /// Number of beam elements.
+    pub elements: usize,
+    /// Scalar.
+    pub precision: Precision,
+    /// Solver.
+    pub solver: Solver,
+    /// Simulated time \[s\].
+    pub duration: f64,
+    /// Gravity \[m/s²\].
+    pub gravity: f64,
+    /// Beam.
+    pub beam: BeamSection,
+    /// Tip mass.
+    pub tip: TipSection,
+    /// Ball.
+    pub ball: BallSection,
+    /// Damping.
+    pub damping: DampingSection,
+    /// Integrator.
+    pub integrator: IntegratorSection,
+    /// Excitation.
+    pub excitation: ExcitationSection,
+    /// Outputs.
+    pub outputs: OutputsSection,
+}
+
+impl Default for BeamSection {
+    fn default() -> Self {
+        let p = Params::<f64>::default().beam;
+        Self { length: p.length, mass: p.mass, area: p.area, modulus: p.modulus, inertia: p.inertia }
+    }
+}
+impl Default for TipSection {
+    fn default() -> Self {
+        let p = Params::<f64>::default().tip;
+        Self { mass: p.mass, inertia: p.inertia, offset: p.offset }
+    }
+}
+impl Default for BallSection {
+    fn default() -> Self {
+        let p = Params::<f64>::default().ball;
+        Self {
+            mass: p.mass,
+            inertia: p.inertia,
+            radius: p.radius,
+            track_radius: p.track_radius,
+            stop_angle_deg: round_deg(p.stop_angle),
+            restitution: p.restitution,
+            stick_speed: p.stick_speed,
+            initial_angle_deg: round_deg(p.initial_angle),
+            impact_model: match p.impact_model {
+                ImpactModel::Instantaneous => ImpactSetting::Instantaneous,
+                ImpactModel::OverStep => ImpactSetting::OverStep,
+            },
+        }
+    }
+}
+impl Default for IntegratorSection {
+    fn default() -> Self {
+        let p = Params::<f64>::default().integrator;
+        Self { gamma: p.gamma, beta: p.beta, step: p.step, tolerance: p.tolerance, max_iterations: p.max_iterations }
+    }
+}
+impl Default for ExcitationSection {
+    fn default() -> Self {
+        Self { kind: ExcitationType::Harmonic, amplitude: Some(0.5e-3), frequency: Some(4.13), file: None }
+    }
+}
+impl Default for OutputsSection {
+    fn default() -> Self {
+        Self { directory: PathBuf::from("out"), plots: vec![Plot::Time, Plot::Fft, Plot::Phase, Plot::Energy], transient: 20.0, every: 1 }
+    }
+}
+impl Default for SceneFile {
+    fn default() -> Self {
+        Self {
+            name: "paper".into(),
+            kind: Kind::Free,
+            elements: 3,
+            precision: Precision::F64,
+            solver: Solver::Core,
+            duration: 60.0,
+            gravity: Params::<f64>::default().gravity,
+            beam: BeamSection::default(),
+            tip: TipSection::default(),
+            ball: BallSection::default(),
+            damping: DampingSection::default(),
+            integrator: IntegratorSection::default(),
+            excitation: ExcitationSection::default(),
+            outputs: OutputsSection::default(),
+        }
+    }
+}
+
+fn round_deg(rad: f64) -> f64 {
+    (rad.to_degrees() * 1e9).round() / 1e9
+}
+
+/// A loaded scene: the file's content and the directory its relative paths refer to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The settings.
+    pub file: SceneFile,
+    /// Directory of the scene file (for `excitation.file`); the working directory otherwise.
+    pub base_dir: PathBuf,
+}
+
+/// The built-in scene names.
+pub const BUILT_IN: [&str; 1] = ["paper"];
+
+impl Scene {
+    /// The paper's scene (Table 1, free ball, 3 elements, f64, 0.5 mm at 4.13 Hz, 60 s).
+    pub fn paper() -> Self {
+        Self { file: SceneFile::default(), base_dir: PathBuf::from(".") }
+    }
+
+    /// `paper` (built in) or a path to a TOML file.
+    pub fn load(spec: &str) -> Result<Self> {
+        if spec == "paper" {
+            return Ok(Self::paper());
+        }
+        let path = Path::new(spec);
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read scene `{spec}`"))?;
+        let file = parse(&text).with_context(|| format!("scene `{spec}`"))?;
+        let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+        let scene = Self { file, base_dir: if base_dir.as_os_str().is_empty() { PathBuf::from(".") } else { base_dir } };
+        scene.validate().with_context(|| format!("scene `{spec}`"))?;
+        Ok(scene)
+    }
+
+    /// Parses scene text (relative paths refer to the working directory) and validates it.
+    pub fn from_toml(text: &str) -> Result<Self> {
+        let scene = Self { file: parse(text)?, base_dir: PathBuf::from(".") };
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// Checks everything: the model parameters (through the core's validation), the mesh, the
+    /// excitation and the outputs. Errors name the scene-file key.
+    pub fn validate(&self) -> Result<()> {
+        let f = &self.file;
+        if !ELEMENTS.contains(&f.elements) {
+            bail!("invalid value for `elements`: {} (supported: 1, 2, 3, 4, 6, 8, 16)", f.elements);
+        }
+        finite_positive(f.duration, "duration")?;
+        self.params()?;
+        let e = &f.excitation;
+        match e.kind {
+            ExcitationType::Harmonic => {
+                let a = e.amplitude.ok_or_else(|| anyhow!("missing `excitation.amplitude` for a harmonic excitation"))?;
+                if !a.is_finite() || a < 0.0 {
+                    bail!("invalid value for `excitation.amplitude`: {a} (must be finite and not negative)");
+                }
+                let fr = e.frequency.ok_or_else(|| anyhow!("missing `excitation.frequency` for a harmonic excitation"))?;
+                finite_positive(fr, "excitation.frequency")?;
+                if e.file.is_some() {
+                    bail!("`excitation.file` is only for type = \"csv\"");
+                }
+            }
+            ExcitationType::Csv => {
+                if e.file.is_none() {
+                    bail!("missing `excitation.file` for a csv excitation");
+                }
+                if e.amplitude.is_some() || e.frequency.is_some() {
+                    bail!("`excitation.amplitude`/`excitation.frequency` are only for type = \"harmonic\"");
+                }
+            }
+        }
+        let o = &f.outputs;
+        if !o.transient.is_finite() || o.transient < 0.0 {
+            bail!("invalid value for `outputs.transient`: {} (must be finite and not negative)", o.transient);
+        }
+        if o.every == 0 {
+            bail!("invalid value for `outputs.every`: 0 (must be at least 1)");
+        }
+        Ok(())
+    }
+
+    /// The model parameters (f64), validated for the scene kind. Errors name the scene key.
+    pub fn params(&self) -> Result<Params<f64>> {
+        let f = &self.file;
+        let d = &f.damping;
+        let damping = match (d.stiffness_proportional, d.ratio, d.frequency) {
+            (None, None, None) => Damping { stiffness_proportional: 0.0 },
+            (Some(c), None, None) => Damping { stiffness_proportional: c },
+            (None, Some(z), Some(fr)) => {
+                finite_positive(fr, "damping.frequency")?;
+                if !z.is_finite() || z < 0.0 {
+                    bail!("invalid value for `damping.ratio`: {z} (must be finite and not negative)");
+                }
+                Damping::from_ratio(z, fr)
+            }
+            (None, Some(_), None) => bail!("`damping.ratio` needs `damping.frequency`"),
+            (None, None, Some(_)) => bail!("`damping.frequency` needs `damping.ratio`"),
+            _ => bail!("give either `damping.stiffness_proportional` or `damping.ratio` with `damping.frequency`"),
+        };
+        let b = &f.ball;
+        let p = Params {
+            beam: BeamParams {
+                length: f.beam.length,
+                mass: f.beam.mass,
+                area: f.beam.area,
+                modulus: f.beam.modulus,
+                inertia: f.beam.inertia,
+            },
+            tip: TipParams { mass: f.tip.mass, inertia: f.tip.inertia, offset: f.tip.offset },
+            ball: BallParams {
+                mass: b.mass,
+                inertia: b.inertia,
+                radius: b.radius,
+                track_radius: b.track_radius,
+                stop_angle: b.stop_angle_deg.to_radians(),
+                restitution: b.restitution,
+                stick_speed: b.stick_speed,
+                initial_angle: b.initial_angle_deg.to_radians(),
+                impact_model: match b.impact_model {
+                    ImpactSetting::OverStep => ImpactModel::OverStep,
+                    ImpactSetting::Instantaneous => ImpactModel::Instantaneous,
+                },
+            },
+            integrator: Integrator {
+                gamma: f.integrator.gamma,
+                beta: f.integrator.beta,
+                step: f.integrator.step,
+                tolerance: f.integrator.tolerance,
+                max_iterations: f.integrator.max_iterations,
+            },
+            damping,
+            gravity: f.gravity,
+        };
+        let has_tip = f.kind != Kind::Beam;
+        p.validate(has_tip, f.kind.has_ball()).map_err(|e| map_core_error(e, self))?;
+        Ok(p)
+    }
+
+    /// Number of steps of `duration`.
+    pub fn steps(&self) -> usize {
+        (self.file.duration / self.file.integrator.step).round() as usize
+    }
+
+    /// The scene as TOML text (with a comment header).
+    pub fn to_toml(&self) -> Result<String> {
+        Ok(toml::to_string(&self.file)?)
+    }
+}
+
+fn finite_positive(x: f64, key: &str) -> Result<()> {
+    if !x.is_finite() || x <= 0.0 {
+        bail!("invalid value for `{key}`: {x} (must be finite and positive)");
+    }
+    Ok(())
+}
+
+/// The scene-file key of a core parameter name, and the value written there.
+fn scene_key(field: &str, s: &Scene) -> (String, String) {
+    let f = &s.file;
+    let v = |x: f64| format!("{x}");
+    match field {
+        "ball.stop_angle" => ("ball.stop_angle_deg".into(), v(f.ball.stop_angle_deg)),
+        "ball.initial_angle" => ("ball.initial_angle_deg".into(), v(f.ball.initial_angle_deg)),
+        "beam.length" => (field.into(), v(f.beam.length)),
+        "beam.mass" => (field.into(), v(f.beam.mass)),
+        "beam.area" => (field.into(), v(f.beam.area)),
+        "beam.modulus" => (field.into(), v(f.beam.modulus)),
+        "beam.inertia" => (field.into(), v(f.beam.inertia)),
+        "tip.mass" => (field.into(), v(f.tip.mass)),
+        "tip.inertia" => (field.into(), v(f.tip.inertia)),
+        "tip.offset" => (field.into(), v(f.tip.offset)),
+        "ball.mass" => (field.into(), v(f.ball.mass)),
+        "ball.inertia" => (field.into(), v(f.ball.inertia)),
+        "ball.radius" => (field.into(), v(f.ball.radius)),
+        "ball.track_radius" => (field.into(), v(f.ball.track_radius)),
+        "ball.restitution" => (field.into(), v(f.ball.restitution)),
+        "ball.stick_speed" => (field.into(), v(f.ball.stick_speed)),
+        "integrator.gamma" => (field.into(), v(f.integrator.gamma)),
+        "integrator.beta" => (field.into(), v(f.integrator.beta)),
+        "integrator.step" => (field.into(), v(f.integrator.step)),
+        "integrator.tolerance" => (field.into(), v(f.integrator.tolerance)),
+        "integrator.max_iterations" => (field.into(), f.integrator.max_iterations.to_string()),
+        "damping.stiffness_proportional" => (field.into(), format!("{:?}", f.damping.stiffness_proportional)),
+        "gravity" => (field.into(), v(f.gravity)),
+        other => (other.into(), "?".into()),
+    }
+}
+
+/// Turns a core error into a message naming the scene-file key.
+pub fn map_core_error(e: absorber_core::Error, scene: &Scene) -> anyhow::Error {
+    match e {
+        absorber_core::Error::InvalidParameter { field, reason } => {
+            let (key, value) = scene_key(field, scene);
+            anyhow!("invalid value for `{key}`: {value} ({reason})")
+        }
+        other => anyhow!(other),
+    }
+}
+
+/// Parses scene text; errors are one line and name the key.
+pub fn parse(text: &str) -> Result<SceneFile> {
+    let de = toml::de::Deserializer::parse(text).map_err(|e| one_line(&e, text, ""))?;
+    serde_path_to_error::deserialize::<_, SceneFile>(de).map_err(|e| {
+        let path = e.path().to_string();
+        one_line(e.inner(), text, &path)
+    })
+}
+
+fn one_line(e: &toml::de::Error, text: &str, path: &str) -> anyhow::Error {
+    let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let at = line.map(|l| format!(" (line {l})")).unwrap_or_default();
+    let msg = e.message().trim().replace('\n', " ");
+    if path.is_empty() || path == "." || msg.contains("unknown field") && !path.contains('.') && path == "?" {
+        anyhow!("{msg}{at}")
+    } else {
+        anyhow!("`{path}`: {msg}{at}")
+    }
+}

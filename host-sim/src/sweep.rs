@@ -1,0 +1,128 @@
+//! Frequency-response sweep (paper Fig. 10): one run per excitation frequency, in parallel,
+//! steady-state amplitudes over the last part of each run.
+
+use crate::excitation::Excitation;
+use crate::run::simulate;
+use crate::scene::{ExcitationType, Scene};
+use anyhow::{bail, Result};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// The paper's excitation frequencies \[Hz\] (§5.1).
+pub const PAPER_FREQUENCIES: [f64; 14] =
+    [3.50, 3.70, 3.80, 3.85, 3.90, 3.95, 4.00, 4.05, 4.10, 4.13, 4.25, 4.40, 4.50, 4.70];
+
+/// Steady-state response at one frequency.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SweepPoint {
+    /// Excitation frequency \[Hz\].
+    pub frequency: f64,
+    /// Half peak-to-peak of the tip deflection over the window \[m\].
+    pub tip_amplitude: f64,
+    /// Mean tip deflection over the window \[m\].
+    pub tip_mean: f64,
+    /// Largest |θ| over the window \[deg\].
+    pub ball_max_deg: f64,
+    /// Half peak-to-peak of θ over the window \[deg\].
+    pub ball_amplitude_deg: f64,
+    /// Stop impacts over the whole run.
+    pub impacts: u32,
+    /// Largest Newton iteration count of a step.
+    pub max_iterations: u32,
+    /// Why the run stopped early (amplitudes then cover what was computed).
+    pub error: Option<String>,
+}
+
+/// Runs the sweep. `last`: the window length at the end of each run \[s\]; `progress(steps)`
+/// is called (from worker threads) with step increments.
+pub fn sweep(
+    scene: &Scene,
+    frequencies: &[f64],
+    last: f64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<SweepPoint>> {
+    if scene.file.excitation.kind != ExcitationType::Harmonic {
+        bail!("sweep needs a harmonic excitation (the scene has type = \"csv\")");
+    }
+    for &f in frequencies {
+        if !f.is_finite() || f <= 0.0 {
+            bail!("invalid sweep frequency {f} (must be finite and positive)");
+        }
+    }
+    let amplitude = scene.file.excitation.amplitude.unwrap_or(0.5e-3);
+    let steps = scene.steps();
+    let h = scene.file.integrator.step;
+    let from = (scene.file.duration - last).max(0.0);
+    // Build once up front so that a bad scene fails before the threads start.
+    crate::run::build_simulator(scene, 0.0)?;
+    Ok(frequencies
+        .par_iter()
+        .map(|&f| {
+            let exc = Excitation::harmonic(amplitude, f, h);
+            let (mut lo, mut hi, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
+            let (mut blo, mut bhi, mut bmax) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+            let (mut impacts, mut max_it) = (0u32, 0u32);
+            let mut last_k = 0usize;
+            let result = simulate(
+                scene,
+                &exc,
+                steps,
+                |r| {
+                    impacts += u32::from(r.impact);
+                    max_it = max_it.max(r.iterations);
+                    if r.t >= from - 1e-9 {
+                        lo = lo.min(r.tip_deflection);
+                        hi = hi.max(r.tip_deflection);
+                        sum += r.tip_deflection;
+                        n += 1;
+                        if r.ball_angle.is_finite() {
+                            let d = r.ball_angle.to_degrees();
+                            blo = blo.min(d);
+                            bhi = bhi.max(d);
+                            bmax = bmax.max(d.abs());
+                        }
+                    }
+                },
+                |k| {
+                    progress((k - last_k) as u64);
+                    last_k = k;
+                },
+            );
+            let half = |lo: f64, hi: f64| if lo <= hi { 0.5 * (hi - lo) } else { f64::NAN };
+            SweepPoint {
+                frequency: f,
+                tip_amplitude: half(lo, hi),
+                tip_mean: if n > 0 { sum / n as f64 } else { f64::NAN },
+                ball_max_deg: if blo <= bhi { bmax } else { f64::NAN },
+                ball_amplitude_deg: half(blo, bhi),
+                impacts,
+                max_iterations: max_it,
+                error: result.err().map(|e| format!("{e:#}")),
+            }
+        })
+        .collect())
+}
+
+/// CSV of a sweep.
+pub fn csv(points: &[SweepPoint]) -> String {
+    let mut s = String::from(
+        "# host-sim sweep: steady-state amplitudes over the last part of each run\n\
+         # frequency [Hz]; tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
+         # ball_max_deg: max |theta| [deg]; ball_amplitude_deg: half peak-to-peak theta [deg]; impacts; max_iterations; error\n\
+         frequency,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,max_iterations,error\n",
+    );
+    for p in points {
+        s.push_str(&format!(
+            "{},{:.6e},{:.6e},{:.4},{:.4},{},{},{}\n",
+            p.frequency,
+            p.tip_amplitude,
+            p.tip_mean,
+            p.ball_max_deg,
+            p.ball_amplitude_deg,
+            p.impacts,
+            p.max_iterations,
+            p.error.as_deref().unwrap_or("").replace(',', ";")
+        ));
+    }
+    s
+}
