@@ -1,0 +1,1216 @@
+//! The full solver of the paper (§§2–4): maximal coordinates, constraints with Lagrange
+//! multipliers, Wehage coordinate partitioning, Newmark with Newton–Raphson.
+//!
+//! **Coordinates** (`z`, in the frame translating with the base): the displacements of all
+//! beam nodal coordinates from the straight reference, root node included (`4(N+1)`), then the
+//! tip mass `(R_t1, R_t2, ψ)` and the ball `(φ, R_b1, R_b2)` (scenes without them leave them
+//! out). The mass matrix is constant: the beam's consistent mass, `diag(m_t, m_t, J_t)`,
+//! `diag(J_b, m_b, m_b)`. Forces: the element forces of [`absorber_core::ancf::Element`] (the one
+//! source of the element integrals), the weights under the effective gravity `g + ÿ_b`.
+//!
+//! **Constraints** `C(z) = 0`: the clamp of the root node (4), the fixed joint (eq. 25: 3, with
+//! `atan2`), the rolling contact (eqs. 26–27 integrated: the ball centre on the circle of radius
+//! ρ about A, and `r_b φ = R_tr ψ − ρ θ`), and, for a held ball (locked scene or ball resting on a
+//! stop), `θ − ψ = α_lock` ([`kin`]).
+//!
+//! **Partitioning** (eq. 28): independent coordinates `q_i` = the free beam coordinates (nodes
+//! 1..N) and φ for a free ball, the same unknowns as the embedded core; dependent ones `q_d` =
+//! the root node, `R_t`, ψ, `R_b` (and φ for a held ball).
+//!
+//! **One Newton iteration** on the independent accelerations `x` (Newmark: `q_i = q̃ + βh² x`,
+//! `q̇_i = ṽ + γh x`): (1) the dependent positions from `C = 0` by Newton–Raphson (to rounding);
+//! (2) the dependent velocities from `C_q q̇ = 0`; (3) the accelerations and multipliers from the
+//! augmented system (eq. 22) `[M C_qᵀ; C_q 0] [q̈; λ] = [Q_e − Q_k; Q_d]`, `Q_d = −(C_q q̇)_q q̇`
+//! (eq. 23), solved by a banded LU; (4) the residual of the independent accelerations,
+//! `δ = x − q̈_i`, weighted by the reduced mass, `r = Bᵀ M B δ` (B = ∂q/∂q_i, the velocity
+//! transformation), which is the virtual work of the unbalanced forces along the independent
+//! directions; (5) the Newton matrix `∂r/∂x`: the beam part from the element tangents (exact),
+//! the tip/ball block (5×5, at the end node) by central differences of the reduced local
+//! residual, which includes the inertia, geometric and `λ·C_qq` terms. Convergence: the core's
+//! criterion, `max |c_pos Δx_i| / scale_i ≤ tolerance`.
+//!
+//! Stops, stick and release, impulses: the core's algorithm (`absorber_core::model`), with the
+//! relative angle `α = θ − ψ` and its gradient computed from the maximal coordinates.
+
+mod band;
+pub mod kin;
+
+use crate::sim::{Observation, Simulator};
+use absorber_core::ancf::{Element, ElementMatrix, ElementVector};
+use absorber_core::tip::Chain;
+use absorber_core::{Contact, Energies, Error, Impact, ImpactModel, Params, Side, StepReport};
+use band::Band;
+use kin::{Bodies, Cons, Mode, MC, NW, PHI, PSI, RB1, RB2, RT1, RT2};
+use nalgebra::{DMatrix, SMatrix, SVector};
+
+/// Which bodies the full solver models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneKind {
+    /// The cantilever alone.
+    BeamOnly,
+    /// Cantilever + tip mass.
+    TipMass,
+    /// Cantilever + tip mass + ball fixed in the housing (θ = ψ).
+    LockedBall,
+    /// Cantilever + tip mass + free ball between the ±stops.
+    FreeBall,
+    /// Free ball, no stops.
+    FreeBallNoStops,
+}
+
+impl SceneKind {
+    fn has_tip(self) -> bool {
+        !matches!(self, SceneKind::BeamOnly)
+    }
+    fn has_ball(self) -> bool {
+        matches!(self, SceneKind::LockedBall | SceneKind::FreeBall | SceneKind::FreeBallNoStops)
+    }
+    fn free_ball(self) -> bool {
+        matches!(self, SceneKind::FreeBall | SceneKind::FreeBallNoStops)
+    }
+    fn stops(self) -> bool {
+        matches!(self, SceneKind::FreeBall)
+    }
+}
+
+/// State in maximal coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FullState {
+    /// Positions `z` (beam: displacements from the reference; bodies: absolute in the base frame).
+    pub q: Vec<f64>,
+    /// Velocities relative to the base.
+    pub v: Vec<f64>,
+    /// Accelerations relative to the base.
+    pub a: Vec<f64>,
+    /// Time \[s\].
+    pub time: f64,
+    /// Base acceleration input at `time` \[m/s²\].
+    pub base_accel: f64,
+    /// Stop contact.
+    pub contact: Contact,
+    /// Branch of the orbit angle θ (θ is continuous, not wrapped to ±π).
+    pub theta_ref: f64,
+}
+
+struct Solved {
+    x: Vec<f64>,
+    iterations: u32,
+    increment: f64,
+}
+
+/// Local kinematics at one configuration: positions and velocities of the 10 local
+/// coordinates, the constraints, and `B_d = ∂w_d/∂w_i`.
+#[derive(Clone, Copy)]
+struct Kin {
+    w: [f64; NW],
+    wd: [f64; NW],
+    cons: Cons,
+    lu_dep: SMatrix<f64, MC, MC>,
+    bd: [[f64; 5]; MC],
+}
+
+struct Evaluated {
+    r: Vec<f64>,
+    jac: Option<Band>,
+    kin: Kin,
+    lambda_local: [f64; MC],
+}
+
+/// Largest Newton step per iteration in scaled units (as the core's trust region).
+const MAX_STEP: f64 = 0.05;
+/// Half-bandwidth of the reduced Newton matrix.
+const RED_BW: usize = 7;
+
+/// The full solver (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct FullSolver {
+    params: Params<f64>,
+    scene: SceneKind,
+    n: usize,
+    element: Element<f64>,
+    me: ElementMatrix<f64>,
+    kb: ElementMatrix<f64>,
+    bodies: Bodies,
+    n_body: usize,
+    nz: usize,
+    state: FullState,
+    equilibrium: FullState,
+}
+
+fn small_solve(a: &SMatrix<f64, MC, MC>, b: SVector<f64, MC>) -> Option<SVector<f64, MC>> {
+    let x = a.lu().solve(&b)?;
+    if x.iter().all(|v| v.is_finite()) {
+        Some(x)
+    } else {
+        None
+    }
+}
+
+impl FullSolver {
+    /// Builds the solver for `scene` with `n_elements` elements, solves the static equilibrium
+    /// by load stepping and starts from it at rest, ball at `ball.initial_angle`.
+    pub fn at_rest(params: Params<f64>, scene: SceneKind, n_elements: usize, base_accel: f64) -> Result<Self, Error> {
+        let mut s = Self::new(params, scene, n_elements)?;
+        s.solve_static()?;
+        s.restart(base_accel)?;
+        Ok(s)
+    }
+
+    /// Builds the solver in the reference configuration (no static solve).
+    pub fn new(params: Params<f64>, scene: SceneKind, n_elements: usize) -> Result<Self, Error> {
+        if n_elements == 0 {
+            return Err(Error::InvalidParameter { field: "n_elements", reason: "must be at least 1" });
+        }
+        if n_elements > 100_000 {
+            return Err(Error::InvalidParameter { field: "n_elements", reason: "must be at most 100000" });
+        }
+        params.validate(scene.has_tip(), scene.has_ball())?;
+        let n = n_elements;
+        let b = &params.beam;
+        let element = Element {
+            length: b.length / n as f64,
+            axial_rigidity: b.modulus * b.area,
+            bending_rigidity: b.modulus * b.inertia,
+            mass_per_length: b.mass / b.length,
+        };
+        let (mt, jt, d) = if scene.has_tip() { (params.tip.mass, params.tip.inertia, params.tip.offset) } else { (0.0, 0.0, 0.0) };
+        let (mb, jb) = if scene.has_ball() { (params.ball.mass, params.ball.inertia) } else { (0.0, 0.0) };
+        let rho = params.ball.path_radius();
+        let bodies = Bodies {
+            length: b.length,
+            offset: d,
+            rho,
+            rb: params.ball.radius,
+            rtr: rho + params.ball.radius,
+            mass: [0.0, 0.0, 0.0, 0.0, mt, mt, jt, jb, mb, mb],
+            weights: (mt, mb),
+        };
+        let n_body = if scene.has_ball() {
+            6
+        } else if scene.has_tip() {
+            3
+        } else {
+            0
+        };
+        let nz = 4 * (n + 1) + n_body;
+        let mut q = vec![0.0; nz];
+        let b0 = 4 * (n + 1);
+        if scene.has_tip() {
+            q[b0] = b.length;
+            q[b0 + 1] = -d;
+        }
+        if scene.has_ball() {
+            q[b0 + 4] = b.length;
+            q[b0 + 5] = -rho;
+        }
+        let state = FullState {
+            q,
+            v: vec![0.0; nz],
+            a: vec![0.0; nz],
+            time: 0.0,
+            base_accel: 0.0,
+            contact: Contact::Off,
+            theta_ref: 0.0,
+        };
+        Ok(Self {
+            params,
+            scene,
+            n,
+            element,
+            me: element.mass_matrix(),
+            kb: element.bending_stiffness(),
+            bodies,
+            n_body,
+            nz,
+            equilibrium: state.clone(),
+            state,
+        })
+    }
+
+    /// The current state.
+    pub fn state(&self) -> &FullState {
+        &self.state
+    }
+
+    /// The static equilibrium.
+    pub fn equilibrium(&self) -> &FullState {
+        &self.equilibrium
+    }
+
+    /// Number of elements.
+    pub fn elements(&self) -> usize {
+        self.n
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> SceneKind {
+        self.scene
+    }
+
+    fn b0(&self) -> usize {
+        4 * (self.n + 1)
+    }
+
+    /// z index of local coordinate j.
+    fn zloc(&self, j: usize) -> usize {
+        if j < 4 {
+            4 * self.n + j
+        } else {
+            self.b0() + j - 4
+        }
+    }
+
+    fn mode(&self, contact: Contact) -> Mode {
+        match self.scene {
+            SceneKind::BeamOnly => Mode::Beam,
+            SceneKind::TipMass => Mode::Tip,
+            SceneKind::LockedBall => Mode::Held(0.0),
+            SceneKind::FreeBall | SceneKind::FreeBallNoStops => match contact {
+                Contact::Off => Mode::Free,
+                Contact::OnStop(side) => Mode::Held(side.sign::<f64>() * self.params.ball.stop_angle),
+            },
+        }
+    }
+
+    fn n_ind(&self, mode: Mode) -> usize {
+        4 * self.n + if mode == Mode::Free { 1 } else { 0 }
+    }
+
+    fn ind_to_z(&self, i: usize) -> usize {
+        if i < 4 * self.n {
+            4 + i
+        } else {
+            self.zloc(PHI)
+        }
+    }
+
+    fn scale(&self, i: usize) -> f64 {
+        if i < 4 * self.n && i % 4 < 2 {
+            self.params.beam.length
+        } else {
+            1.0
+        }
+    }
+
+    fn gather_ind(&self, z: &[f64], mode: Mode) -> Vec<f64> {
+        (0..self.n_ind(mode)).map(|i| z[self.ind_to_z(i)]).collect()
+    }
+
+    fn local_of(&self, z: &[f64]) -> [f64; NW] {
+        let mut w = [0.0; NW];
+        for (j, wj) in w.iter_mut().enumerate() {
+            if j < 4 || j - 4 < self.n_body {
+                *wj = z[self.zloc(j)];
+            }
+        }
+        w
+    }
+
+    fn effective_gravity(&self, base_accel: f64) -> f64 {
+        self.params.gravity + base_accel
+    }
+
+    /// Dependent local positions from `C = 0` (Newton–Raphson to rounding), dependent
+    /// velocities from `C_q q̇ = 0`, and `B_d = −C_d⁻¹ C_i`.
+    fn local_kin(&self, mode: Mode, qi: &[f64], vi: &[f64], warm: &[f64; NW], theta_ref: f64) -> Result<Kin, Error> {
+        let ind = mode.independent();
+        let dep = mode.dependent();
+        let m = mode.m();
+        let mut w = *warm;
+        let mut wd = [0.0; NW];
+        for (k, &j) in ind.iter().enumerate() {
+            w[j] = qi.get(k).copied().unwrap_or(0.0);
+            wd[j] = vi.get(k).copied().unwrap_or(0.0);
+        }
+        let build = |c: &Cons| {
+            let mut a = SMatrix::<f64, MC, MC>::identity();
+            for r in 0..m {
+                for (col, &j) in dep.iter().enumerate() {
+                    a[(r, col)] = c.grad[r][j];
+                }
+            }
+            a
+        };
+        let zero = [0.0; NW];
+        let mut converged = m == 0;
+        for _ in 0..60 {
+            if converged {
+                break;
+            }
+            let c = self.bodies.constraints(&w, &zero, mode, theta_ref);
+            let mut rhs = SVector::<f64, MC>::zeros();
+            for r in 0..m {
+                rhs[r] = -c.val[r];
+            }
+            let dx = small_solve(&build(&c), rhs).ok_or(Error::Singular)?;
+            let mut inc: f64 = 0.0;
+            for (r, &j) in dep.iter().enumerate() {
+                w[j] += dx[r];
+                inc = inc.max(dx[r].abs() / self.bodies.scale(j));
+            }
+            if !inc.is_finite() {
+                return Err(Error::NonFiniteState);
+            }
+            converged = inc <= 1e-13;
+        }
+        if !converged {
+            return Err(Error::NoConvergence { iterations: 60, increment: f64::NAN });
+        }
+        let c0 = self.bodies.constraints(&w, &zero, mode, theta_ref);
+        let lu_dep = build(&c0);
+        let mut bd = [[0.0; 5]; MC];
+        if m > 0 {
+            let lu = lu_dep.lu();
+            let mut rhs = SVector::<f64, MC>::zeros();
+            for r in 0..m {
+                rhs[r] = -ind.iter().map(|&j| c0.grad[r][j] * wd[j]).sum::<f64>();
+            }
+            let vd = lu.solve(&rhs).ok_or(Error::Singular)?;
+            for (r, &j) in dep.iter().enumerate() {
+                wd[j] = vd[r];
+            }
+            for (k, &jk) in ind.iter().enumerate() {
+                let mut rhs = SVector::<f64, MC>::zeros();
+                for r in 0..m {
+                    rhs[r] = -c0.grad[r][jk];
+                }
+                let col = lu.solve(&rhs).ok_or(Error::Singular)?;
+                for r in 0..m {
+                    bd[r][k] = col[r];
+                }
+            }
+        }
+        let cons = self.bodies.constraints(&w, &wd, mode, theta_ref);
+        Ok(Kin { w, wd, cons, lu_dep, bd })
+    }
+
+    /// Dependent local accelerations from the acceleration constraints `C_q q̈ = Q_d`.
+    fn local_accel(&self, kin: &Kin, mode: Mode, ai: &[f64]) -> Result<[f64; NW], Error> {
+        let ind = mode.independent();
+        let dep = mode.dependent();
+        let m = mode.m();
+        let mut wdd = [0.0; NW];
+        for (k, &j) in ind.iter().enumerate() {
+            wdd[j] = ai.get(k).copied().unwrap_or(0.0);
+        }
+        if m > 0 {
+            let mut rhs = SVector::<f64, MC>::zeros();
+            for r in 0..m {
+                rhs[r] = -kin.cons.quad[r] - ind.iter().map(|&j| kin.cons.grad[r][j] * wdd[j]).sum::<f64>();
+            }
+            let x = small_solve(&kin.lu_dep, rhs).ok_or(Error::Singular)?;
+            for (r, &j) in dep.iter().enumerate() {
+                wdd[j] = x[r];
+            }
+        }
+        Ok(wdd)
+    }
+
+    /// Reduced residual of the tip body and ball on the local independent coordinates:
+    /// `B_localᵀ (M ẅ − Q_e)` over the local coordinates.
+    fn local_residual(&self, kin: &Kin, mode: Mode, ai: &[f64], g_eff: f64) -> Result<[f64; 5], Error> {
+        let wdd = self.local_accel(kin, mode, ai)?;
+        let (mt, mb) = self.bodies.weights;
+        let mut gw = [0.0; NW];
+        for j in 0..NW {
+            gw[j] = self.bodies.mass[j] * wdd[j];
+        }
+        gw[RT2] += mt * g_eff;
+        gw[RB2] += mb * g_eff;
+        let mut r = [0.0; 5];
+        for (k, &jk) in mode.independent().iter().enumerate() {
+            r[k] = gw[jk] + mode.dependent().iter().enumerate().map(|(row, &j)| kin.bd[row][k] * gw[j]).sum::<f64>();
+        }
+        Ok(r)
+    }
+
+    /// Residual (and, with a chain, the Newton matrix) at independent positions, velocities and
+    /// accelerations. `warm` carries the dependent positions between calls.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate(
+        &self,
+        qi: &[f64],
+        vi: &[f64],
+        ai: &[f64],
+        g_eff: f64,
+        mode: Mode,
+        warm: &mut [f64; NW],
+        theta_ref: f64,
+        ch: Option<&Chain<f64>>,
+    ) -> Result<Evaluated, Error> {
+        let n = self.n;
+        let nz = self.nz;
+        let ni = self.n_ind(mode);
+        let loc0 = 4 * n - 4;
+        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], warm, theta_ref)?;
+        *warm = kin.w;
+        let m = mode.m();
+        let bw = RED_BW.max(4 + self.n_body + m);
+        let na = 4 + nz + m;
+        let mut aug = Band::zeros(na, bw, bw);
+        let mut rhs = vec![0.0; na];
+        let mut jac = ch.map(|_| Band::zeros(ni, RED_BW, RED_BW));
+        let zpos = |j: usize| 4 + j;
+        // Beam: mass, elastic and weight, element by element (node 0 included).
+        let weight = self.element.gravity_force(g_eff);
+        let damp = self.params.damping.stiffness_proportional;
+        let zval = |i: usize, x: &[f64]| if i < 4 { 0.0 } else { x[i - 4] };
+        for e in 0..n {
+            let mut u = ElementVector::<f64>::zeros();
+            let mut ud = ElementVector::<f64>::zeros();
+            for i in 0..8 {
+                u[i] = zval(4 * e + i, qi);
+                ud[i] = zval(4 * e + i, vi);
+            }
+            let (ql, kl) = self.element.axial_force_and_tangent(&u);
+            let f = weight - self.kb * (u + ud * damp) - ql;
+            for i in 0..8 {
+                let zi = 4 * e + i;
+                rhs[zpos(zi)] += f[i];
+                for j in 0..8 {
+                    aug.add(zpos(zi), zpos(4 * e + j), self.me[(i, j)]);
+                }
+            }
+            if let (Some(jb), Some(c)) = (jac.as_mut(), ch) {
+                let je = self.me * c.c_m + self.kb * (c.c_q + c.c_v * damp) + kl * c.c_q;
+                for i in 0..8 {
+                    let Some(gi) = (4 * e + i).checked_sub(4) else { continue };
+                    for j in 0..8 {
+                        let Some(gj) = (4 * e + j).checked_sub(4) else { continue };
+                        jb.add(gi, gj, je[(i, j)]);
+                    }
+                }
+            }
+        }
+        // Bodies: constant diagonal mass, weights.
+        let b0 = self.b0();
+        for jb in 0..self.n_body {
+            aug.add(zpos(b0 + jb), zpos(b0 + jb), self.bodies.mass[4 + jb]);
+        }
+        let (mt, mb) = self.bodies.weights;
+        if self.n_body >= 3 {
+            rhs[zpos(self.zloc(RT2))] -= mt * g_eff;
+        }
+        if self.n_body >= 6 {
+            rhs[zpos(self.zloc(RB2))] -= mb * g_eff;
+        }
+        // Clamp: root node displacement = 0 (multipliers first).
+        for c in 0..4 {
+            aug.add(c, zpos(c), 1.0);
+            aug.add(zpos(c), c, 1.0);
+        }
+        // Fixed joint, rolling contact, lock.
+        for k in 0..m {
+            let row = 4 + nz + k;
+            for j in 0..NW {
+                let g = kin.cons.grad[k][j];
+                if g != 0.0 {
+                    let zj = zpos(self.zloc(j));
+                    aug.add(row, zj, g);
+                    aug.add(zj, row, g);
+                }
+            }
+            rhs[row] = -kin.cons.quad[k];
+        }
+        let lu = aug.factor().ok_or(Error::Singular)?;
+        if !lu.solve(&mut rhs) {
+            return Err(Error::Singular);
+        }
+        let zdd = &rhs[4..4 + nz];
+        let mut lambda_local = [0.0; MC];
+        for (k, l) in lambda_local.iter_mut().enumerate().take(m) {
+            *l = rhs[4 + nz + k];
+        }
+        // r = Bᵀ M B δ with δ = x − q̈_i(augmented).
+        let delta: Vec<f64> = (0..ni).map(|i| ai[i] - zdd[self.ind_to_z(i)]).collect();
+        let mut y = vec![0.0; nz];
+        for (i, d) in delta.iter().enumerate() {
+            y[self.ind_to_z(i)] = *d;
+        }
+        let dep = mode.dependent();
+        for (row, &j) in dep.iter().enumerate() {
+            y[self.zloc(j)] = (0..mode.independent().len()).map(|k| kin.bd[row][k] * delta[loc0 + k]).sum();
+        }
+        let mut my = vec![0.0; nz];
+        for e in 0..n {
+            for i in 0..8 {
+                let mut s = 0.0;
+                for j in 0..8 {
+                    s += self.me[(i, j)] * y[4 * e + j];
+                }
+                my[4 * e + i] += s;
+            }
+        }
+        for jb in 0..self.n_body {
+            my[b0 + jb] += self.bodies.mass[4 + jb] * y[b0 + jb];
+        }
+        let mut r: Vec<f64> = (0..ni).map(|i| my[self.ind_to_z(i)]).collect();
+        for k in 0..mode.independent().len() {
+            r[loc0 + k] += dep.iter().enumerate().map(|(row, &j)| kin.bd[row][k] * my[self.zloc(j)]).sum::<f64>();
+        }
+        // Tip/ball block of the Newton matrix: central differences of the local residual.
+        if let (Some(jb), Some(c)) = (jac.as_mut(), ch) {
+            let nl = mode.independent().len();
+            if m > 0 {
+                let denom = c.c_q.abs() + c.c_v.abs() * 1e-2 + c.c_m.abs() * 1e-4;
+                for k in 0..nl {
+                    let s = if k < 2 { self.params.beam.length } else { 1.0 };
+                    let eps = 1e-6 * s / denom;
+                    let mut cols = [[0.0; 5]; 2];
+                    for (side, sign) in [(0usize, 1.0f64), (1, -1.0)] {
+                        let mut q = qi[loc0..].to_vec();
+                        let mut v = vi[loc0..].to_vec();
+                        let mut a = ai[loc0..].to_vec();
+                        q[k] += sign * eps * c.c_q;
+                        v[k] += sign * eps * c.c_v;
+                        a[k] += sign * eps * c.c_m;
+                        let kp = self.local_kin(mode, &q, &v, &kin.w, theta_ref)?;
+                        cols[side] = self.local_residual(&kp, mode, &a, g_eff)?;
+                    }
+                    for row in 0..nl {
+                        jb.add(loc0 + row, loc0 + k, (cols[0][row] - cols[1][row]) / (2.0 * eps));
+                    }
+                }
+            }
+        }
+        Ok(Evaluated { r, jac, kin, lambda_local })
+    }
+
+    /// Newton–Raphson on `x` with `q = q₀ + c_q x`, `v = v₀ + c_v x`, `a = a₀ + c_m x` (the
+    /// core's iteration and criterion).
+    #[allow(clippy::too_many_arguments)]
+    fn newton(
+        &self,
+        q0: &[f64],
+        v0: &[f64],
+        a0: &[f64],
+        mut x: Vec<f64>,
+        ch: &Chain<f64>,
+        c_pos: f64,
+        g_eff: f64,
+        mode: Mode,
+        warm: &mut [f64; NW],
+        theta_ref: f64,
+    ) -> Result<Solved, Error> {
+        let max = self.params.integrator.max_iterations;
+        let tol = self.params.integrator.tolerance;
+        let ni = x.len();
+        let loc0 = 4 * self.n - 4;
+        let held_spin_row = if self.scene.free_ball() {
+            mode.dependent().iter().position(|&j| j == PHI)
+        } else {
+            None
+        };
+        let mut increment = 0.0;
+        for it in 1..=max {
+            let q: Vec<f64> = (0..ni).map(|i| q0[i] + ch.c_q * x[i]).collect();
+            let v: Vec<f64> = (0..ni).map(|i| v0[i] + ch.c_v * x[i]).collect();
+            let a: Vec<f64> = (0..ni).map(|i| a0[i] + ch.c_m * x[i]).collect();
+            let ev = self.evaluate(&q, &v, &a, g_eff, mode, warm, theta_ref, Some(ch))?;
+            if !ev.r.iter().all(|z| z.is_finite()) {
+                return Err(Error::NonFiniteState);
+            }
+            let jac = ev.jac.ok_or(Error::Singular)?;
+            let lu = jac.factor().ok_or(Error::Singular)?;
+            let mut dx: Vec<f64> = ev.r.iter().map(|r| -r).collect();
+            if !lu.solve(&mut dx) {
+                return Err(Error::Singular);
+            }
+            increment = 0.0;
+            for (i, d) in dx.iter().enumerate() {
+                increment = f64::max(increment, (d * c_pos).abs() / self.scale(i));
+            }
+            // Ball held on a stop: the core keeps φ as an unknown tied to ψ; count its increment.
+            if let Some(row) = held_spin_row {
+                let dphi: f64 = (0..4).map(|k| ev.kin.bd[row][k] * dx[loc0 + k]).sum();
+                increment = f64::max(increment, (dphi * c_pos).abs());
+            }
+            if increment > MAX_STEP {
+                let f = MAX_STEP / increment;
+                x.iter_mut().zip(dx.iter()).for_each(|(xi, d)| *xi += d * f);
+            } else {
+                x.iter_mut().zip(dx.iter()).for_each(|(xi, d)| *xi += d);
+            }
+            if increment <= tol {
+                return Ok(Solved { x, iterations: it, increment });
+            }
+        }
+        Err(Error::NoConvergence { iterations: max, increment })
+    }
+
+    /// The full state from independent positions, velocities and accelerations.
+    #[allow(clippy::too_many_arguments)]
+    fn complete(
+        &self,
+        qi: &[f64],
+        vi: &[f64],
+        ai: &[f64],
+        mode: Mode,
+        prev: &FullState,
+        time: f64,
+        base_accel: f64,
+        contact: Contact,
+    ) -> Result<FullState, Error> {
+        let loc0 = 4 * self.n - 4;
+        let warm = self.local_of(&prev.q);
+        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], &warm, prev.theta_ref)?;
+        let wdd = self.local_accel(&kin, mode, &ai[loc0..])?;
+        let mut s = FullState {
+            q: vec![0.0; self.nz],
+            v: vec![0.0; self.nz],
+            a: vec![0.0; self.nz],
+            time,
+            base_accel,
+            contact,
+            theta_ref: prev.theta_ref,
+        };
+        for i in 0..4 * self.n {
+            s.q[4 + i] = qi[i];
+            s.v[4 + i] = vi[i];
+            s.a[4 + i] = ai[i];
+        }
+        for j in 4..4 + self.n_body {
+            let z = self.zloc(j);
+            s.q[z] = kin.w[j];
+            s.v[z] = kin.wd[j];
+            s.a[z] = wdd[j];
+        }
+        if self.scene.has_ball() {
+            s.theta_ref = self.bodies.orbit(&kin.w, &kin.wd, prev.theta_ref).0;
+        }
+        if !(s.q.iter().chain(s.v.iter()).chain(s.a.iter()).all(|z| z.is_finite())) {
+            return Err(Error::NonFiniteState);
+        }
+        Ok(s)
+    }
+
+    /// Static equilibrium under gravity by load stepping (4 steps); sets the state to it.
+    pub fn solve_static(&mut self) -> Result<u32, Error> {
+        const LOAD_STEPS: usize = 4;
+        let mode = self.mode(Contact::Off);
+        let ni = self.n_ind(mode);
+        let z = vec![0.0; ni];
+        let ch = Chain { c_q: 1.0, c_v: 0.0, c_m: 0.0 };
+        let mut x = z.clone();
+        let mut warm = self.local_of(&self.state.q);
+        let mut iterations = 0;
+        for k in 1..=LOAD_STEPS {
+            let g = self.params.gravity * k as f64 / LOAD_STEPS as f64;
+            let s = self.newton(&z, &z, &z, x, &ch, 1.0, g, mode, &mut warm, 0.0)?;
+            x = s.x;
+            iterations += s.iterations;
+        }
+        let mut seed = self.state.clone();
+        seed.q = {
+            let mut q = seed.q.clone();
+            for j in 4..4 + self.n_body {
+                q[self.zloc(j)] = warm[j];
+            }
+            q
+        };
+        let st = self.complete(&x, &z, &z, mode, &seed, 0.0, 0.0, Contact::Off)?;
+        self.equilibrium = st.clone();
+        self.state = st;
+        Ok(iterations)
+    }
+
+    /// Restarts at t = 0 from the static equilibrium at rest, ball at `ball.initial_angle`.
+    pub fn restart(&mut self, base_accel: f64) -> Result<(), Error> {
+        if !base_accel.is_finite() {
+            return Err(Error::NonFiniteInput);
+        }
+        let mut s = self.equilibrium.clone();
+        s.base_accel = base_accel;
+        s.contact = Contact::Off;
+        let mode = self.mode(Contact::Off);
+        if mode == Mode::Free {
+            // Rotate the ball by the initial angle at fixed housing: by c₅, δφ = −(ρ/r_b) δθ.
+            let phi = self.zloc(PHI);
+            s.q[phi] -= self.params.ball.initial_angle * self.bodies.rho / self.bodies.rb;
+            let qi = self.gather_ind(&s.q, mode);
+            let vi = self.gather_ind(&s.v, mode);
+            let ai = self.gather_ind(&s.a, mode);
+            s = self.complete(&qi, &vi, &ai, mode, &s, 0.0, base_accel, Contact::Off)?;
+            if self.scene.stops() && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
+                return Err(Error::InvalidParameter {
+                    field: "ball.initial_angle",
+                    reason: "puts the ball beyond a stop relative to the tilted housing",
+                });
+            }
+        }
+        let acc = self.consistent_acceleration(&s)?;
+        s = self.with_accel(&s, &acc.x)?;
+        self.state = s;
+        Ok(())
+    }
+
+    fn with_accel(&self, s: &FullState, ai: &[f64]) -> Result<FullState, Error> {
+        let mode = self.mode(s.contact);
+        let qi = self.gather_ind(&s.q, mode);
+        let vi = self.gather_ind(&s.v, mode);
+        self.complete(&qi, &vi, ai, mode, s, s.time, s.base_accel, s.contact)
+    }
+
+    fn consistent_acceleration(&self, s: &FullState) -> Result<Solved, Error> {
+        let mode = self.mode(s.contact);
+        let ch = Chain { c_q: 0.0, c_v: 0.0, c_m: 1.0 };
+        let i = &self.params.integrator;
+        let c_pos = i.beta * i.step * i.step;
+        let qi = self.gather_ind(&s.q, mode);
+        let vi = self.gather_ind(&s.v, mode);
+        let ai = self.gather_ind(&s.a, mode);
+        let z = vec![0.0; qi.len()];
+        let mut warm = self.local_of(&s.q);
+        self.newton(&qi, &vi, &z, ai, &ch, c_pos, self.effective_gravity(s.base_accel), mode, &mut warm, s.theta_ref)
+    }
+
+    /// One Newmark step of the independent coordinates.
+    fn newmark(&self, s: &FullState, h: f64, base_accel: f64) -> Result<(FullState, Solved), Error> {
+        let it = &self.params.integrator;
+        let mode = self.mode(s.contact);
+        let qi = self.gather_ind(&s.q, mode);
+        let vi = self.gather_ind(&s.v, mode);
+        let ai = self.gather_ind(&s.a, mode);
+        let ni = qi.len();
+        let q_pred: Vec<f64> = (0..ni).map(|i| qi[i] + vi[i] * h + ai[i] * (h * h * (0.5 - it.beta))).collect();
+        let v_pred: Vec<f64> = (0..ni).map(|i| vi[i] + ai[i] * (h * (1.0 - it.gamma))).collect();
+        let ch = Chain { c_q: it.beta * h * h, c_v: it.gamma * h, c_m: 1.0 };
+        let z = vec![0.0; ni];
+        let mut warm = self.local_of(&s.q);
+        let solved = self.newton(
+            &q_pred,
+            &v_pred,
+            &z,
+            ai,
+            &ch,
+            ch.c_q,
+            self.effective_gravity(base_accel),
+            mode,
+            &mut warm,
+            s.theta_ref,
+        )?;
+        let a = &solved.x;
+        let qn: Vec<f64> = (0..ni).map(|i| q_pred[i] + a[i] * ch.c_q).collect();
+        let vn: Vec<f64> = (0..ni).map(|i| v_pred[i] + a[i] * ch.c_v).collect();
+        let next = self.complete(&qn, &vn, a, mode, s, s.time + h, base_accel, s.contact)?;
+        Ok((next, solved))
+    }
+
+    /// Relative ball angle α = θ − ψ (0 without a free ball).
+    fn relative_angle(&self, s: &FullState) -> f64 {
+        if !self.scene.free_ball() {
+            return 0.0;
+        }
+        let w = self.local_of(&s.q);
+        self.bodies.relative_angle(&w, &[0.0; NW], s.theta_ref).0
+    }
+
+    /// Relative ball angle rate α̇ = θ̇ − ψ̇ (0 without a free ball).
+    fn relative_rate(&self, s: &FullState) -> f64 {
+        if !self.scene.free_ball() {
+            return 0.0;
+        }
+        let w = self.local_of(&s.q);
+        let wd = self.local_of(&s.v);
+        self.bodies.relative_angle(&w, &wd, s.theta_ref).2
+    }
+
+    /// Fraction τ ∈ [0, 1] of the step at which α reaches `target`: root of the cubic Hermite
+    /// interpolant of α through both step ends with their rates (as the core).
+    fn crossing_fraction(&self, start: &FullState, end: &FullState, h: f64, target: f64) -> f64 {
+        let (a0, a1) = (self.relative_angle(start) - target, self.relative_angle(end) - target);
+        let (d0, d1) = (self.relative_rate(start) * h, self.relative_rate(end) * h);
+        let linear = a0 / (a0 - a1);
+        let mut tau = if linear.is_finite() { linear.clamp(0.0, 1.0) } else { 0.0 };
+        for _ in 0..6 {
+            let (t2, t3) = (tau * tau, tau * tau * tau);
+            let p = (2.0 * t3 - 3.0 * t2 + 1.0) * a0 + (t3 - 2.0 * t2 + tau) * d0 + (3.0 * t2 - 2.0 * t3) * a1 + (t3 - t2) * d1;
+            let dp = (6.0 * t2 - 6.0 * tau) * (a0 - a1) + (3.0 * t2 - 4.0 * tau + 1.0) * d0 + (3.0 * t2 - 2.0 * tau) * d1;
+            if !(dp.abs() > 0.0) {
+                break;
+            }
+            let next = tau - p / dp;
+            if !next.is_finite() {
+                break;
+            }
+            tau = next.clamp(0.0, 1.0);
+        }
+        tau
+    }
+
+    /// Generalized contact force on the ball along θ in a held state: `−λ` of the lock
+    /// constraint, from the augmented system.
+    fn contact_force(&self, s: &FullState) -> Result<f64, Error> {
+        let mode = self.mode(s.contact);
+        if !matches!(mode, Mode::Held(_)) {
+            return Ok(0.0);
+        }
+        let qi = self.gather_ind(&s.q, mode);
+        let vi = self.gather_ind(&s.v, mode);
+        let ai = self.gather_ind(&s.a, mode);
+        let mut warm = self.local_of(&s.q);
+        let ev = self.evaluate(&qi, &vi, &ai, self.effective_gravity(s.base_accel), mode, &mut warm, s.theta_ref, None)?;
+        Ok(-ev.lambda_local[5])
+    }
+
+    /// Advances one step to the input `base_accel` = ÿ_b(t + h). On error the state is kept.
+    pub fn step(&mut self, base_accel: f64) -> Result<StepReport<f64>, Error> {
+        if !base_accel.is_finite() {
+            return Err(Error::NonFiniteInput);
+        }
+        let h = self.params.integrator.step;
+        let start = self.state.clone();
+        let (mut next, solved) = self.newmark(&start, h, base_accel)?;
+        let mut report = StepReport { iterations: solved.iterations, increment: solved.increment, impact: None };
+        if self.scene.stops() {
+            match next.contact {
+                Contact::Off => {
+                    let alpha1 = self.relative_angle(&next);
+                    if alpha1.abs() > self.params.ball.stop_angle {
+                        next = self.step_with_impact(&start, &next, h, base_accel, alpha1, &mut report)?;
+                    }
+                }
+                Contact::OnStop(side) => {
+                    if side.sign::<f64>() * self.contact_force(&next)? > 0.0 {
+                        next.contact = Contact::Off;
+                    }
+                }
+            }
+        }
+        self.state = next;
+        Ok(report)
+    }
+
+    fn step_with_impact(
+        &self,
+        start: &FullState,
+        trial: &FullState,
+        h: f64,
+        base_accel: f64,
+        alpha1: f64,
+        report: &mut StepReport<f64>,
+    ) -> Result<FullState, Error> {
+        let stop = self.params.ball.stop_angle;
+        let side = if alpha1 > 0.0 { Side::Positive } else { Side::Negative };
+        let target = side.sign::<f64>() * stop;
+        let tau = self.crossing_fraction(start, trial, h, target);
+        let h1 = tau * h;
+        let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
+        let mut mid = if h1 > h * 1e-6 {
+            let (m, s) = self.newmark(start, h1, accel_mid)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            m
+        } else {
+            start.clone()
+        };
+        let impact = self.impact(&mut mid, side)?;
+        let acc = self.consistent_acceleration(&mid)?;
+        report.iterations += acc.iterations;
+        mid = self.with_accel(&mid, &acc.x)?;
+        let rest = h - h1;
+        let mut end = if rest > h * 1e-6 {
+            let (e, s) = self.newmark(&mid, rest, base_accel)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            e
+        } else {
+            mid
+        };
+        if end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
+            let side2 = if self.relative_angle(&end) > 0.0 { Side::Positive } else { Side::Negative };
+            end = self.hold(&end, side2)?;
+            let acc = self.consistent_acceleration(&end)?;
+            end = self.with_accel(&end, &acc.x)?;
+            if side2.sign::<f64>() * self.contact_force(&end)? > 0.0 {
+                end.contact = Contact::Off;
+            }
+        }
+        report.impact = Some(impact);
+        Ok(end)
+    }
+
+    /// The state with the ball put on the stop and held there (φ becomes dependent).
+    fn hold(&self, s: &FullState, side: Side) -> Result<FullState, Error> {
+        let contact = Contact::OnStop(side);
+        let mode = self.mode(contact);
+        let qi = self.gather_ind(&s.q, mode);
+        let vi = self.gather_ind(&s.v, mode);
+        let ai = self.gather_ind(&s.a, mode);
+        self.complete(&qi, &vi, &ai, mode, s, s.time, s.base_accel, contact)
+    }
+
+    /// Stop impact: projects the ball onto the stop, applies `Λ ∇αᵀ` with
+    /// `Λ = −(1+e) α̇⁻ / (∇α W⁻¹ ∇αᵀ)`, decides whether the ball stays on the stop.
+    fn impact(&self, s: &mut FullState, side: Side) -> Result<Impact<f64>, Error> {
+        let ball = &self.params.ball;
+        let loc0 = 4 * self.n - 4;
+        // Projection: the held configuration gives φ on the stop; velocities are kept.
+        let held = self.hold(s, side)?;
+        let phi = self.zloc(PHI);
+        s.q[phi] = held.q[phi];
+        s.contact = Contact::Off;
+        let mode = Mode::Free;
+        let qi = self.gather_ind(&s.q, mode);
+        let mut vi = self.gather_ind(&s.v, mode);
+        let ai = self.gather_ind(&s.a, mode);
+        *s = self.complete(&qi, &vi, &ai, mode, s, s.time, s.base_accel, Contact::Off)?;
+        let w = self.local_of(&s.q);
+        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], &w, s.theta_ref)?;
+        let (_, g, _) = self.bodies.relative_angle(&kin.w, &kin.wd, s.theta_ref);
+        let ni = qi.len();
+        let mut grad = vec![0.0; ni];
+        for (k, &jk) in mode.independent().iter().enumerate() {
+            grad[loc0 + k] = g[jk] + mode.dependent().iter().enumerate().map(|(r, &j)| kin.bd[r][k] * g[j]).sum::<f64>();
+        }
+        let speed: f64 = grad.iter().zip(vi.iter()).map(|(a, b)| a * b).sum();
+        let mut impact = Impact { time: s.time, side, relative_speed: speed, impulse: 0.0, energy_loss: 0.0, stuck: false };
+        let plastic = speed.abs() < ball.stick_speed;
+        if side.sign::<f64>() * speed > 0.0 {
+            let e = if plastic { 0.0 } else { ball.restitution };
+            let it = &self.params.integrator;
+            let ch = if ball.impact_model == ImpactModel::OverStep {
+                Chain { c_q: it.beta * it.step * it.step, c_v: it.gamma * it.step, c_m: 1.0 }
+            } else {
+                Chain { c_q: 0.0, c_v: 0.0, c_m: 1.0 }
+            };
+            let mut warm = w;
+            let ev = self.evaluate(&qi, &vi, &ai, self.effective_gravity(s.base_accel), mode, &mut warm, s.theta_ref, Some(&ch))?;
+            let lu = ev.jac.ok_or(Error::Singular)?.factor().ok_or(Error::Singular)?;
+            let mut y = grad.clone();
+            if !lu.solve(&mut y) {
+                return Err(Error::Singular);
+            }
+            let wgt: f64 = grad.iter().zip(y.iter()).map(|(a, b)| a * b).sum();
+            if !(wgt > 0.0) {
+                return Err(Error::Singular);
+            }
+            let lambda = -(1.0 + e) * speed / wgt;
+            vi.iter_mut().zip(y.iter()).for_each(|(v, yy)| *v += yy * lambda);
+            *s = self.complete(&qi, &vi, &ai, mode, s, s.time, s.base_accel, Contact::Off)?;
+            impact.impulse = lambda / ball.path_radius();
+            impact.energy_loss = 0.5 * (1.0 - e * e) * speed * speed / wgt;
+        }
+        if plastic {
+            let mut held = self.hold(s, side)?;
+            let acc = self.consistent_acceleration(&held)?;
+            held = self.with_accel(&held, &acc.x)?;
+            if side.sign::<f64>() * self.contact_force(&held)? <= 0.0 {
+                *s = held;
+                impact.stuck = true;
+            }
+        }
+        Ok(impact)
+    }
+
+    /// Largest |C(q)| of the position constraints at the current state (all of them: clamp,
+    /// fixed joint, rolling contact, lock) \[m or rad\].
+    pub fn constraint_violation(&self) -> f64 {
+        self.violation_of(&self.state)
+    }
+
+    fn violation_of(&self, s: &FullState) -> f64 {
+        let mut worst = s.q[0..4].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mode = self.mode(s.contact);
+        let w = self.local_of(&s.q);
+        let c = self.bodies.constraints(&w, &[0.0; NW], mode, s.theta_ref);
+        for k in 0..mode.m() {
+            worst = worst.max(c.val[k].abs());
+        }
+        worst
+    }
+
+    /// Mass and stiffness reduced to the independent coordinates, linearized about the static
+    /// equilibrium (symmetrized): the derivatives of the reduced residual.
+    pub fn linearized(&self) -> Result<(DMatrix<f64>, DMatrix<f64>), Error> {
+        let s = &self.equilibrium;
+        let mode = self.mode(Contact::Off);
+        let qi = self.gather_ind(&s.q, mode);
+        let z = vec![0.0; qi.len()];
+        let g = self.params.gravity;
+        let mut warm = self.local_of(&s.q);
+        let m = self
+            .evaluate(&qi, &z, &z, g, mode, &mut warm, s.theta_ref, Some(&Chain { c_q: 0.0, c_v: 0.0, c_m: 1.0 }))?
+            .jac
+            .ok_or(Error::Singular)?
+            .to_dense();
+        let k = self
+            .evaluate(&qi, &z, &z, g, mode, &mut warm, s.theta_ref, Some(&Chain { c_q: 1.0, c_v: 0.0, c_m: 0.0 }))?
+            .jac
+            .ok_or(Error::Singular)?
+            .to_dense();
+        Ok(((&m + m.transpose()) * 0.5, (&k + k.transpose()) * 0.5))
+    }
+
+    /// Natural frequencies about the static equilibrium, ascending \[Hz\].
+    pub fn frequencies(&self) -> Result<Vec<f64>, Error> {
+        let (m, k) = self.linearized()?;
+        let l = m.cholesky().ok_or(Error::Singular)?.l();
+        let x = l.solve_lower_triangular(&k).ok_or(Error::Singular)?;
+        let a = l.solve_lower_triangular(&x.transpose()).ok_or(Error::Singular)?;
+        let a = (&a + a.transpose()) * 0.5;
+        let mut ev: Vec<f64> = a.symmetric_eigenvalues().iter().map(|l| l.max(0.0).sqrt() / (2.0 * core::f64::consts::PI)).collect();
+        ev.sort_by(|a, b| a.total_cmp(b));
+        Ok(ev)
+    }
+
+    /// Vertical deflection of the beam end relative to the base \[m\].
+    pub fn tip_deflection(&self) -> f64 {
+        self.state.q[4 * self.n + 1]
+    }
+
+    fn heights(&self, s: &FullState) -> (f64, f64, f64) {
+        let unit = self.element.gravity_force(1.0);
+        let mut beam = 0.0;
+        for e in 0..self.n {
+            let u = ElementVector::<f64>::from_fn(|i, _| s.q[4 * e + i]);
+            beam -= unit.dot(&u);
+        }
+        let tip = if self.n_body >= 3 { s.q[self.zloc(RT2)] } else { 0.0 };
+        let ball = if self.n_body >= 6 { s.q[self.zloc(RB2)] } else { 0.0 };
+        (beam, tip, ball)
+    }
+
+    fn tip_angle_of(&self, s: &FullState) -> (f64, f64) {
+        if self.n_body >= 3 {
+            (s.q[self.zloc(PSI)], s.v[self.zloc(PSI)])
+        } else {
+            let i = 4 * self.n;
+            let (x, y) = (1.0 + s.q[i + 2], s.q[i + 3]);
+            let (xd, yd) = (s.v[i + 2], s.v[i + 3]);
+            (y.atan2(x), (x * yd - y * xd) / (x * x + y * y))
+        }
+    }
+}
+
+impl Simulator for FullSolver {
+    fn step(&mut self, base_accel: f64) -> Result<StepReport<f64>, Error> {
+        FullSolver::step(self, base_accel)
+    }
+
+    fn observe(&self) -> Observation {
+        let s = &self.state;
+        let i = 4 * self.n;
+        let (psi, psid) = self.tip_angle_of(s);
+        let (th, thd) = if self.scene.has_ball() {
+            let w = self.local_of(&s.q);
+            let mut wd = [0.0; NW];
+            for (j, x) in wd.iter_mut().enumerate() {
+                if j < 4 || j - 4 < self.n_body {
+                    *x = s.v[self.zloc(j)];
+                }
+            }
+            self.bodies.orbit(&w, &wd, s.theta_ref)
+        } else {
+            (f64::NAN, f64::NAN)
+        };
+        Observation {
+            time: s.time,
+            tip_deflection: s.q[i + 1],
+            tip_velocity: s.v[i + 1],
+            tip_angle: psi,
+            tip_rate: psid,
+            ball_angle: th,
+            ball_rate: thd,
+            ball_relative_angle: th - psi,
+            ball_relative_rate: thd - psid,
+        }
+    }
+
+    fn energies(&self, base_velocity: f64, base_displacement: f64) -> Energies<f64> {
+        let s = &self.state;
+        let g = self.params.gravity;
+        let mut e = Energies {
+            beam_strain: 0.0,
+            beam_kinetic: 0.0,
+            beam_potential: 0.0,
+            tip_kinetic: 0.0,
+            tip_potential: 0.0,
+            ball_kinetic: 0.0,
+            ball_potential: 0.0,
+        };
+        for k in 0..self.n {
+            let u = ElementVector::<f64>::from_fn(|i, _| s.q[4 * k + i]);
+            e.beam_strain += self.element.axial_energy(&u) + self.element.bending_energy(&u);
+            let mut v = ElementVector::<f64>::from_fn(|i, _| s.v[4 * k + i]);
+            v[1] += base_velocity;
+            v[5] += base_velocity;
+            e.beam_kinetic += 0.5 * v.dot(&(self.me * v));
+        }
+        let now = self.heights(s);
+        let eq = self.heights(&self.equilibrium);
+        e.beam_potential = g * (now.0 - eq.0 + self.params.beam.mass * base_displacement);
+        if self.n_body >= 3 {
+            let p = &self.params.tip;
+            let (vx, vy) = (s.v[self.zloc(RT1)], s.v[self.zloc(RT2)] + base_velocity);
+            let rate = s.v[self.zloc(PSI)];
+            e.tip_kinetic = 0.5 * (p.mass * (vx * vx + vy * vy) + p.inertia * rate * rate);
+            e.tip_potential = g * p.mass * (now.1 - eq.1 + base_displacement);
+        }
+        if self.n_body >= 6 {
+            let b = &self.params.ball;
+            let (vx, vy) = (s.v[self.zloc(RB1)], s.v[self.zloc(RB2)] + base_velocity);
+            let spin = s.v[self.zloc(PHI)];
+            e.ball_kinetic = 0.5 * (b.mass * (vx * vx + vy * vy) + b.inertia * spin * spin);
+            e.ball_potential = g * b.mass * (now.2 - eq.2 + base_displacement);
+        }
+        e
+    }
+
+    fn natural_frequencies(&self) -> Result<Vec<f64>, Error> {
+        self.frequencies()
+    }
+
+    fn static_tip_deflection(&self) -> f64 {
+        self.equilibrium.q[4 * self.n + 1]
+    }
+
+    fn solver_name(&self) -> &'static str {
+        "full"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The residual from the augmented system equals the beam residual plus the reduced local
+    /// residual (two routes to the same virtual work), and the Newton matrix is its derivative.
+    #[test]
+    fn residual_routes_agree_and_newton_matrix_is_derivative() {
+        let mut s = FullSolver::new(Params::default(), SceneKind::FreeBall, 2).expect("valid");
+        s.solve_static().expect("static");
+        let mode = Mode::Free;
+        let ni = s.n_ind(mode);
+        let mut qi = s.gather_ind(&s.equilibrium.q, mode);
+        let mut vi = vec![0.0; ni];
+        let mut ai = vec![0.0; ni];
+        for i in 0..ni {
+            let f = (i as f64 + 1.0) * 0.37;
+            qi[i] += 1e-3 * f.sin();
+            vi[i] = 0.3 * (1.3 * f).cos();
+            ai[i] = 20.0 * (0.7 * f).sin();
+        }
+        vi[ni - 1] = -30.0;
+        let ch = Chain { c_q: 0.36 * 9e-6, c_v: 0.7 * 3e-3, c_m: 1.0 };
+        let mut warm = s.local_of(&s.equilibrium.q);
+        let ev = s.evaluate(&qi, &vi, &ai, 9.0, mode, &mut warm, 0.0, Some(&ch)).expect("eval");
+        let jac = ev.jac.expect("jac").to_dense();
+        let scale = jac.amax();
+        for j in 0..ni {
+            let h = 1e-2;
+            let pert = |sg: f64| {
+                let q: Vec<f64> = (0..ni).map(|i| qi[i] + if i == j { sg * h * ch.c_q } else { 0.0 }).collect();
+                let v: Vec<f64> = (0..ni).map(|i| vi[i] + if i == j { sg * h * ch.c_v } else { 0.0 }).collect();
+                let a: Vec<f64> = (0..ni).map(|i| ai[i] + if i == j { sg * h * ch.c_m } else { 0.0 }).collect();
+                let mut w = warm;
+                s.evaluate(&q, &v, &a, 9.0, mode, &mut w, 0.0, None).expect("eval").r
+            };
+            let (rp, rm) = (pert(1.0), pert(-1.0));
+            for i in 0..ni {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                assert!((fd - jac[(i, j)]).abs() <= 1e-6 * scale, "J[{i},{j}] {} vs fd {fd}", jac[(i, j)]);
+            }
+        }
+    }
+}
