@@ -1,0 +1,329 @@
+//! # absorber-firmware
+//!
+//! `absorber-core` on a Cortex-M4F, run under QEMU (`-M mps2-an386`), and the same scene run on
+//! the host as the bit-for-bit reference.
+//!
+//! Every bin of this crate (`fw-free`, `fw-beam`, `fw-locked`, and the model-less baseline
+//! `fw-empty`) builds twice from one source:
+//!
+//! * for `thumbv7em-none-eabihf`: `no_std`, `no_main`, cortex-m-rt, output and exit code through
+//!   semihosting; the model lives in a `static` (so it shows in `.bss`);
+//! * for the host: an ordinary program that prints exactly the same text, which is the
+//!   reference the firmware must reproduce bit for bit.
+//!
+//! The scene driver, [`run`], is shared. It feeds the base acceleration
+//! `ÿ_b(t_k) = −A Ω² sin(Ω t_k)`, `t_k = k h`, `k = 1..=STEPS`, computed in `f32` with `libm`,
+//! prints tip deflection and ball angle at every whole second, and folds every step's full
+//! state and report into a 64-bit FNV-1a fingerprint ([`Summary::hash`]). The firmware gets the
+//! host's fingerprint as a semihosting argument (`expect=0x…`) and exits 0 only if they agree.
+//!
+//! The model step is called through [`Sim::step`], a non-inlined function per scene, so its
+//! instructions can be counted between its entry and its return address (see
+//! `scripts/embedded-report.sh`).
+#![cfg_attr(target_os = "none", no_std)]
+
+use absorber_core::{Error, Model, Params, Scene, StepReport};
+use core::fmt::{self, Write};
+
+/// Excitation amplitude A \[m\] (the paper's free-ball run).
+pub const AMPLITUDE: f32 = 0.5e-3;
+/// Excitation frequency \[Hz\]: Ω = 2π·4.13 rad/s.
+pub const FREQUENCY_HZ: f32 = 4.13;
+/// Simulated time \[s\].
+pub const DURATION_S: u32 = 20;
+/// Time step in milliseconds (must equal `Params::default().integrator.step`).
+pub const STEP_MS: u32 = 3;
+/// Number of steps: ⌈20 s / 3 ms⌉ = 6667.
+pub const STEPS: u32 = (DURATION_S * 1000).div_ceil(STEP_MS);
+
+/// Base acceleration ÿ_b at the end of step `k` (time `k h`) \[m/s²\], in `f32` with `libm`.
+#[inline(never)]
+pub fn base_accel(k: u32, h: f32) -> f32 {
+    let omega = 2.0 * core::f32::consts::PI * FREQUENCY_HZ;
+    let t = k as f32 * h;
+    -AMPLITUDE * omega * omega * libm::sinf(omega * t)
+}
+
+/// What the driver needs from a scene.
+pub trait Sim: Sized {
+    /// Scene name as printed.
+    fn name() -> &'static str;
+    /// Builds the scene from `Params::default()` at static equilibrium, at rest, input 0.
+    fn init() -> Result<Self, Error>;
+    /// One model step to the new base acceleration. Never inlined: its instructions are counted.
+    fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error>;
+    /// Time step h \[s\].
+    fn h(&self) -> f32;
+    /// Tip deflection \[m\].
+    fn tip(&self) -> f32;
+    /// Ball angle relative to the housing \[rad\] (0 without a free ball).
+    fn ball(&self) -> f32;
+    /// Static tip deflection \[m\].
+    fn static_tip(&self) -> f32;
+    /// Feeds every word of the dynamic state to `f`.
+    fn state_words(&self, f: &mut dyn FnMut(u32));
+}
+
+impl<S: Scene, const N: usize, const D: usize> Sim for Model<f32, S, N, D> {
+    fn name() -> &'static str {
+        core::any::type_name::<S>()
+    }
+
+    fn init() -> Result<Self, Error> {
+        Model::at_rest(Params::default(), 0.0)
+    }
+
+    #[inline(never)]
+    fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
+        Model::step(self, base_accel)
+    }
+
+    fn h(&self) -> f32 {
+        self.params().integrator.step
+    }
+
+    fn tip(&self) -> f32 {
+        self.tip_deflection()
+    }
+
+    fn ball(&self) -> f32 {
+        self.ball_relative_angle().map_or(0.0, |(a, _)| a)
+    }
+
+    fn static_tip(&self) -> f32 {
+        self.static_tip_deflection()
+    }
+
+    fn state_words(&self, f: &mut dyn FnMut(u32)) {
+        let s = self.state();
+        for x in s.q.iter().chain(s.v.iter()).chain(s.a.iter()) {
+            f(x.to_bits());
+        }
+        f(s.time.to_bits());
+        f(s.base_accel.to_bits());
+        f(match s.contact {
+            absorber_core::Contact::Off => 0,
+            absorber_core::Contact::OnStop(absorber_core::Side::Positive) => 1,
+            absorber_core::Contact::OnStop(absorber_core::Side::Negative) => 2,
+        });
+    }
+}
+
+/// No model at all: the same driver, printing and hashing, for the flash/RAM baseline.
+pub struct Empty {
+    last: f32,
+}
+
+impl Sim for Empty {
+    fn name() -> &'static str {
+        "empty"
+    }
+
+    fn init() -> Result<Self, Error> {
+        Ok(Empty { last: 0.0 })
+    }
+
+    #[inline(never)]
+    fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
+        self.last = base_accel;
+        Ok(StepReport {
+            iterations: 1,
+            increment: 0.0,
+            impact: None,
+        })
+    }
+
+    fn h(&self) -> f32 {
+        STEP_MS as f32 * 1e-3
+    }
+
+    fn tip(&self) -> f32 {
+        self.last
+    }
+
+    fn ball(&self) -> f32 {
+        0.0
+    }
+
+    fn static_tip(&self) -> f32 {
+        0.0
+    }
+
+    fn state_words(&self, f: &mut dyn FnMut(u32)) {
+        f(self.last.to_bits());
+    }
+}
+
+/// 64-bit FNV-1a over 32-bit words (each word fed as 4 bytes, little end first).
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv(pub u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    /// Folds one word in.
+    pub fn word(&mut self, w: u32) {
+        for b in w.to_le_bytes() {
+            self.0 ^= u64::from(b);
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+}
+
+/// What a run did.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Summary {
+    /// Fingerprint of every step's state and report.
+    pub hash: u64,
+    /// Steps that hit a stop.
+    pub impacts: u32,
+    /// Impacts after which the ball stayed on the stop.
+    pub stuck: u32,
+    /// Newton iterations summed over all steps.
+    pub iterations: u32,
+    /// Most Newton iterations in one step.
+    pub max_iterations: u32,
+    /// Steps that returned an error (state kept, run continued).
+    pub errors: u32,
+}
+
+/// Hooks around each step (the firmware measures the stack there; the host does nothing).
+pub trait Probe {
+    /// Just before `Sim::step`.
+    fn before_step(&mut self) {}
+    /// Just after it.
+    fn after_step(&mut self) {}
+}
+
+/// Does nothing.
+pub struct NoProbe;
+impl Probe for NoProbe {}
+
+/// Short name of an error (no float formatting: keeps the model's flash figure honest).
+pub fn error_name(e: &Error) -> &'static str {
+    match e {
+        Error::InvalidParameter { field, .. } => field,
+        Error::NonFiniteInput => "NonFiniteInput",
+        Error::NoConvergence { .. } => "NoConvergence",
+        Error::NonFiniteState => "NonFiniteState",
+        Error::Singular => "Singular",
+        _ => "other",
+    }
+}
+
+struct F(f32);
+impl fmt::Display for F {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:e} ({:08x})", self.0, self.0.to_bits())
+    }
+}
+
+/// Runs the scene for [`STEPS`] steps from the model's current state, printing to `out`.
+/// The text is identical on the host and on the target.
+pub fn run<M: Sim, W: Write, P: Probe>(m: &mut M, out: &mut W, probe: &mut P) -> Summary {
+    let h = m.h();
+    let _ = writeln!(
+        out,
+        "scene {} h={} steps={} A={:e} f={:e}",
+        M::name(),
+        F(h),
+        STEPS,
+        AMPLITUDE,
+        FREQUENCY_HZ
+    );
+    let _ = writeln!(out, "static tip={}", F(m.static_tip()));
+    let mut hash = Fnv::default();
+    let mut s = Summary::default();
+    // Impact steps printed on the current line (16 per line).
+    let mut on_line = 0u32;
+    for k in 1..=STEPS {
+        let accel = base_accel(k, h);
+        probe.before_step();
+        let r = m.step(accel);
+        probe.after_step();
+        match r {
+            Ok(rep) => {
+                s.iterations += rep.iterations;
+                s.max_iterations = s.max_iterations.max(rep.iterations);
+                hash.word(rep.iterations);
+                hash.word(rep.increment.to_bits());
+                if let Some(i) = rep.impact {
+                    s.impacts += 1;
+                    s.stuck += u32::from(i.stuck);
+                    for w in [i.time, i.relative_speed, i.impulse, i.energy_loss] {
+                        hash.word(w.to_bits());
+                    }
+                    hash.word(u32::from(i.stuck));
+                    // Which steps hit a stop, 16 per line (the report looks up the worst step).
+                    if on_line == 0 {
+                        let _ = write!(out, "impact steps:");
+                    }
+                    let _ = write!(out, " {k}");
+                    on_line += 1;
+                    if on_line == 16 {
+                        let _ = writeln!(out);
+                        on_line = 0;
+                    }
+                }
+            }
+            Err(e) => {
+                s.errors += 1;
+                hash.word(0xdead_0000 | s.errors);
+                let _ = writeln!(out, "step {k}: error {} (state kept)", error_name(&e));
+            }
+        }
+        m.state_words(&mut |w| hash.word(w));
+        // Every whole second of simulated time (k h crosses j seconds).
+        if (k * STEP_MS) / 1000 != ((k - 1) * STEP_MS) / 1000 {
+            if on_line != 0 {
+                let _ = writeln!(out);
+                on_line = 0;
+            }
+            let _ = writeln!(out, "k={k} tip={} ball={}", F(m.tip()), F(m.ball()));
+        }
+    }
+    if on_line != 0 {
+        let _ = writeln!(out);
+    }
+    s.hash = hash.0;
+    let _ = writeln!(
+        out,
+        "impacts={} stuck={} iterations={} max_iterations={} errors={}",
+        s.impacts, s.stuck, s.iterations, s.max_iterations, s.errors
+    );
+    let _ = writeln!(out, "state_hash=0x{:016x}", s.hash);
+    s
+}
+
+/// Host side: runs the scene and prints the reference (the firmware must print the same).
+#[cfg(not(target_os = "none"))]
+pub fn host_main<M: Sim>() {
+    use std::io::Write as _;
+    struct Out(String);
+    impl Write for Out {
+        fn write_str(&mut self, s: &str) -> fmt::Result {
+            self.0.push_str(s);
+            Ok(())
+        }
+    }
+    let mut out = Out(String::new());
+    let code = match M::init() {
+        Ok(mut m) => {
+            run(&mut m, &mut out, &mut NoProbe);
+            0
+        }
+        Err(e) => {
+            let _ = writeln!(out, "init failed: {}", error_name(&e));
+            3
+        }
+    };
+    let _ = std::io::stdout().write_all(out.0.as_bytes());
+    std::process::exit(code);
+}
+
+#[cfg(target_os = "none")]
+pub mod target;
