@@ -3,7 +3,7 @@
 //! nalgebra's `lu()` needs typenum bounds that a generic `const D` cannot satisfy; this one is
 //! generic, allocation-free, and has no panic path: loop bounds are the compile-time `D`.
 
-use crate::scalar::Real;
+use crate::scalar::{is_positive, Real};
 use nalgebra::{SMatrix, SVector};
 
 /// Solves `A x = b` by Gaussian elimination with partial pivoting; `None` if `A` is singular
@@ -23,7 +23,7 @@ pub fn solve<T: Real, const D: usize>(
                 p = i;
             }
         }
-        if !(best > T::zero()) || !best.is_finite() {
+        if !is_positive(best) || !best.is_finite() {
             return None;
         }
         if p != k {

@@ -5,7 +5,7 @@ use crate::beam::Beam;
 use crate::error::Error;
 use crate::linalg;
 use crate::params::{ImpactModel, Params};
-use crate::scalar::{lit, to_f64, Real};
+use crate::scalar::{is_positive, lit, to_f64, Real};
 use crate::scene::{BallKind, Scene};
 use crate::tip::{self, BallMode, Chain, LocalState, TipInertia, LOCAL};
 use core::marker::PhantomData;
@@ -692,7 +692,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             let dp = (lit::<T>(6.0) * t2 - lit::<T>(6.0) * tau) * (a0 - a1)
                 + (three * t2 - lit::<T>(4.0) * tau + T::one()) * d0
                 + (three * t2 - two * tau) * d1;
-            if !(dp.abs() > T::zero()) {
+            if !is_positive(dp.abs()) {
                 break;
             }
             let next = tau - p / dp;
@@ -776,7 +776,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             };
             let y = linalg::solve(m, grad).ok_or(Error::Singular)?;
             let w = grad.dot(&y);
-            if !(w > T::zero()) {
+            if !is_positive(w) {
                 return Err(Error::Singular);
             }
             let lambda = -(T::one() + e) * speed / w;

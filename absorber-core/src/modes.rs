@@ -8,7 +8,7 @@
 
 use crate::error::Error;
 use crate::model::{Contact, Model};
-use crate::scalar::{lit, Real};
+use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
 use crate::tip::Chain;
 use nalgebra::{SMatrix, SVector};
@@ -130,7 +130,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let x = l.solve_lower_triangular(m)?;
         let a = l.solve_lower_triangular(&x.transpose())?;
         let mu = symmetric_eigenvalues((a + a.transpose()) * lit::<T>(0.5));
-        if mu.iter().any(|v| !(*v > T::zero())) {
+        if mu.iter().any(|v| !is_positive(*v)) {
             return None;
         }
         // μ ascending ⇒ ω² = 1/μ descending: reverse.

@@ -19,3 +19,9 @@ pub fn to_f64<T: Real>(x: T) -> f64 {
     // `RealField` offers no direct `to_f64`; go through `SubsetOf`.
     nalgebra::try_convert(x).unwrap_or(f64::NAN)
 }
+
+/// `x > 0`, false for NaN: the guard for pivots, denominators and eigenvalues.
+#[inline(always)]
+pub fn is_positive<T: Real>(x: T) -> bool {
+    x > T::zero()
+}

@@ -12,9 +12,14 @@ fn field_of(e: Error) -> &'static str {
 fn rejects(change: impl Fn(&mut Params<f64>), field: &str) {
     let mut p = Params::<f64>::default();
     change(&mut p);
-    let e = FreeBallModel::<f64, 3, 13>::new(p).err().unwrap_or_else(|| panic!("{field} accepted"));
+    let e = FreeBallModel::<f64, 3, 13>::new(p)
+        .err()
+        .unwrap_or_else(|| panic!("{field} accepted"));
     assert_eq!(field_of(e), field);
-    assert!(e.to_string().contains(field), "message names the field: {e}");
+    assert!(
+        e.to_string().contains(field),
+        "message names the field: {e}"
+    );
 }
 
 #[test]
@@ -38,9 +43,18 @@ fn every_bad_parameter_is_rejected_with_its_name() {
     rejects(|p| p.integrator.gamma = 0.4, "integrator.gamma");
     rejects(|p| p.integrator.beta = 0.2, "integrator.beta");
     rejects(|p| p.integrator.step = 0.0, "integrator.step");
-    rejects(|p| p.integrator.tolerance = f64::NAN, "integrator.tolerance");
-    rejects(|p| p.integrator.max_iterations = 0, "integrator.max_iterations");
-    rejects(|p| p.damping.stiffness_proportional = -1.0, "damping.stiffness_proportional");
+    rejects(
+        |p| p.integrator.tolerance = f64::NAN,
+        "integrator.tolerance",
+    );
+    rejects(
+        |p| p.integrator.max_iterations = 0,
+        "integrator.max_iterations",
+    );
+    rejects(
+        |p| p.damping.stiffness_proportional = -1.0,
+        "damping.stiffness_proportional",
+    );
     rejects(|p| p.gravity = f64::NAN, "gravity");
 }
 
@@ -51,7 +65,10 @@ fn a_scene_validates_only_what_it_contains() {
     p.tip.mass = -1.0;
     p.ball.radius = f64::NAN;
     assert!(BeamModel::<f64, 3, 12>::new(p).is_ok());
-    assert_eq!(field_of(LockedBallModel::<f64, 3, 12>::new(p).unwrap_err()), "tip.mass");
+    assert_eq!(
+        field_of(LockedBallModel::<f64, 3, 12>::new(p).unwrap_err()),
+        "tip.mass"
+    );
 }
 
 /// The default parameters are the paper's Table 1, and f32 accepts γ = 0.7, β = 0.36 (on the
@@ -59,10 +76,27 @@ fn a_scene_validates_only_what_it_contains() {
 #[test]
 fn table_1_defaults_are_valid_in_both_precisions() {
     let p = Params::<f64>::default();
-    assert_eq!((p.beam.length, p.beam.mass, p.beam.area, p.beam.modulus), (0.365, 0.116, 4.06e-5, 200e9));
-    assert_eq!((p.tip.mass, p.tip.inertia, p.tip.offset), (0.1154, 1.871e-5, 0.0204));
-    assert_eq!((p.ball.mass, p.ball.inertia, p.ball.radius, p.ball.track_radius), (0.014, 3.15e-7, 0.0075, 0.0395));
-    assert_eq!((p.integrator.gamma, p.integrator.beta, p.integrator.step), (0.7, 0.36, 0.003));
+    assert_eq!(
+        (p.beam.length, p.beam.mass, p.beam.area, p.beam.modulus),
+        (0.365, 0.116, 4.06e-5, 200e9)
+    );
+    assert_eq!(
+        (p.tip.mass, p.tip.inertia, p.tip.offset),
+        (0.1154, 1.871e-5, 0.0204)
+    );
+    assert_eq!(
+        (
+            p.ball.mass,
+            p.ball.inertia,
+            p.ball.radius,
+            p.ball.track_radius
+        ),
+        (0.014, 3.15e-7, 0.0075, 0.0395)
+    );
+    assert_eq!(
+        (p.integrator.gamma, p.integrator.beta, p.integrator.step),
+        (0.7, 0.36, 0.003)
+    );
     assert!(FreeBallModel::<f32, 3, 13>::new(Params::default()).is_ok());
 }
 
@@ -97,6 +131,9 @@ fn failed_step_returns_an_error_and_keeps_the_state() {
     m.set_state(*good.state());
     let before = *m.state();
     let e = m.step(5000.0).unwrap_err();
-    assert!(matches!(e, Error::NoConvergence { iterations: 1, .. }), "{e:?}");
+    assert!(
+        matches!(e, Error::NoConvergence { iterations: 1, .. }),
+        "{e:?}"
+    );
     assert_eq!(*m.state(), before);
 }

@@ -5,9 +5,10 @@ use absorber_core::{BeamModel, FreeBallModel, LockedBallModel, Model, Params, Sc
 use common::*;
 
 fn bare_params() -> Params<f64> {
-    let mut p = Params::<f64>::default();
-    p.gravity = 0.0;
-    p
+    Params::<f64> {
+        gravity: 0.0,
+        ..Default::default()
+    }
 }
 
 /// Bare cantilever without gravity vs Euler–Bernoulli, f_i = (β_i L)²/(2π L²)·√(EI/μ) with

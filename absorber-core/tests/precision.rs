@@ -19,7 +19,9 @@ fn compare(freq: f64, seconds: f64) -> (f64, f64, Option<f64>) {
         let t32 = k as f32 * 0.003;
         m32.step(-0.5e-3 * w32 * w32 * (w32 * t32).sin()).unwrap();
         let d = (m64.tip_deflection() - m32.tip_deflection() as f64).abs();
-        let da = (m64.ball_relative_angle().unwrap().0 - m32.ball_relative_angle().unwrap().0 as f64).abs();
+        let da = (m64.ball_relative_angle().unwrap().0
+            - m32.ball_relative_angle().unwrap().0 as f64)
+            .abs();
         amp = amp.max((m64.tip_deflection() - y0).abs());
         worst = worst.max(d);
         if separation.is_none() && (d > 0.1 * amp.max(1e-4) || da > 0.1) {

@@ -18,8 +18,10 @@ fn euler_bernoulli(p: &Params<f64>, tip_mass: f64) -> f64 {
 /// the tip-mass offset moves the load by u_t2·ψ ≈ 1e-7 L.
 #[test]
 fn static_tip_deflection_is_euler_bernoulli_in_the_linear_range_for_any_n() {
-    let mut p = Params::<f64>::default();
-    p.gravity = 9.81e-3;
+    let p = Params::<f64> {
+        gravity: 9.81e-3,
+        ..Default::default()
+    };
     let reference = -euler_bernoulli(&p, p.tip.mass + p.ball.mass);
     let d1 = LockedBallModel::<f64, 1, 4>::at_rest(p, 0.0)
         .unwrap()
