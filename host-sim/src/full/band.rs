@@ -29,7 +29,13 @@ impl Band {
     /// Zero `n × n` band matrix.
     pub fn zeros(n: usize, kl: usize, ku: usize) -> Self {
         let width = 2 * kl + ku + 1;
-        Self { n, kl, ku, width, data: vec![0.0; n * width] }
+        Self {
+            n,
+            kl,
+            ku,
+            width,
+            data: vec![0.0; n * width],
+        }
     }
 
     #[inline]
@@ -43,7 +49,9 @@ impl Band {
     /// Entry (0 outside the band).
     #[inline]
     pub fn get(&self, i: usize, j: usize) -> f64 {
-        self.slot(i, j).and_then(|s| self.data.get(s).copied()).unwrap_or(0.0)
+        self.slot(i, j)
+            .and_then(|s| self.data.get(s).copied())
+            .unwrap_or(0.0)
     }
 
     /// Adds `v` to entry (i, j); returns false if (i, j) lies outside the band (not stored).
@@ -177,7 +185,11 @@ mod tests {
         for i in 0..n {
             for j in i.saturating_sub(kl)..(i + ku + 1).min(n) {
                 // Zero diagonal in places: needs pivoting.
-                let v = if i == j && i % 4 == 0 { 0.0 } else { ((i * 7 + j * 3) as f64).sin() + 0.1 };
+                let v = if i == j && i % 4 == 0 {
+                    0.0
+                } else {
+                    ((i * 7 + j * 3) as f64).sin() + 0.1
+                };
                 assert!(a.add(i, j, v));
             }
         }
@@ -189,7 +201,10 @@ mod tests {
         for i in 0..n {
             assert!((b[i] - x[i]).abs() < 1e-10, "{i}: {} vs {}", b[i], x[i]);
         }
-        let xd = dense.lu().solve(&nalgebra::DVector::from_column_slice(&x)).expect("regular");
+        let xd = dense
+            .lu()
+            .solve(&nalgebra::DVector::from_column_slice(&x))
+            .expect("regular");
         assert!(xd.iter().all(|v| v.is_finite()));
     }
 }

@@ -127,7 +127,11 @@ impl Bodies {
 
     /// The active constraints at `w` with velocities `wd`.
     pub fn constraints(&self, w: &[f64; NW], wd: &[f64; NW], mode: Mode, theta_ref: f64) -> Cons {
-        let mut c = Cons { val: [0.0; MC], grad: [[0.0; NW]; MC], quad: [0.0; MC] };
+        let mut c = Cons {
+            val: [0.0; MC],
+            grad: [[0.0; NW]; MC],
+            quad: [0.0; MC],
+        };
         if mode == Mode::Beam {
             return c;
         }
@@ -194,7 +198,12 @@ impl Bodies {
     }
 
     /// Relative ball angle α = θ − ψ, its gradient over `w` and its rate.
-    pub fn relative_angle(&self, w: &[f64; NW], wd: &[f64; NW], theta_ref: f64) -> (f64, [f64; NW], f64) {
+    pub fn relative_angle(
+        &self,
+        w: &[f64; NW],
+        wd: &[f64; NW],
+        theta_ref: f64,
+    ) -> (f64, [f64; NW], f64) {
         let (dx, dy) = self.ball_offset(w);
         let dist2 = dx * dx + dy * dy;
         let theta = theta_of(dx, dy, theta_ref);
@@ -238,7 +247,9 @@ mod tests {
             rho: 0.032,
             rb: 0.0075,
             rtr: 0.0395,
-            mass: [0.0, 0.0, 0.0, 0.0, 0.1154, 0.1154, 1.871e-5, 3.15e-7, 0.014, 0.014],
+            mass: [
+                0.0, 0.0, 0.0, 0.0, 0.1154, 0.1154, 1.871e-5, 3.15e-7, 0.014, 0.014,
+            ],
             weights: (0.1154, 0.014),
         }
     }
@@ -247,7 +258,9 @@ mod tests {
     #[test]
     fn gradients_and_quadratic_terms_match_finite_differences() {
         let b = bodies();
-        let w = [0.01, -0.02, -0.03, -0.1, 0.37, -0.04, -0.09, 1.3, 0.38, -0.05];
+        let w = [
+            0.01, -0.02, -0.03, -0.1, 0.37, -0.04, -0.09, 1.3, 0.38, -0.05,
+        ];
         let wd = [0.1, -0.3, 0.2, 0.5, -0.1, 0.2, 0.7, -3.0, 0.4, -0.6];
         let mode = Mode::Held(0.2);
         let c = b.constraints(&w, &wd, mode, 0.0);
@@ -257,8 +270,14 @@ mod tests {
                 let (mut wp, mut wm) = (w, w);
                 wp[j] += h;
                 wm[j] -= h;
-                let fd = (b.constraints(&wp, &wd, mode, 0.0).val[k] - b.constraints(&wm, &wd, mode, 0.0).val[k]) / (2.0 * h);
-                assert!((fd - c.grad[k][j]).abs() < 1e-7, "c{k} w{j}: {fd} vs {}", c.grad[k][j]);
+                let fd = (b.constraints(&wp, &wd, mode, 0.0).val[k]
+                    - b.constraints(&wm, &wd, mode, 0.0).val[k])
+                    / (2.0 * h);
+                assert!(
+                    (fd - c.grad[k][j]).abs() < 1e-7,
+                    "c{k} w{j}: {fd} vs {}",
+                    c.grad[k][j]
+                );
             }
             // d/dt (grad · wd) along w + t wd = wdᵀ H wd.
             let (mut wp, mut wm) = (w, w);
@@ -267,9 +286,14 @@ mod tests {
                 wm[j] -= h * wd[j];
             }
             let dot = |g: &[f64; NW]| g.iter().zip(wd.iter()).map(|(a, b)| a * b).sum::<f64>();
-            let fd = (dot(&b.constraints(&wp, &wd, mode, 0.0).grad[k]) - dot(&b.constraints(&wm, &wd, mode, 0.0).grad[k]))
+            let fd = (dot(&b.constraints(&wp, &wd, mode, 0.0).grad[k])
+                - dot(&b.constraints(&wm, &wd, mode, 0.0).grad[k]))
                 / (2.0 * h);
-            assert!((fd - c.quad[k]).abs() < 1e-5 * (1.0 + fd.abs()), "quad c{k}: {fd} vs {}", c.quad[k]);
+            assert!(
+                (fd - c.quad[k]).abs() < 1e-5 * (1.0 + fd.abs()),
+                "quad c{k}: {fd} vs {}",
+                c.quad[k]
+            );
         }
     }
 }

@@ -63,7 +63,10 @@ impl SceneKind {
         !matches!(self, SceneKind::BeamOnly)
     }
     fn has_ball(self) -> bool {
-        matches!(self, SceneKind::LockedBall | SceneKind::FreeBall | SceneKind::FreeBallNoStops)
+        matches!(
+            self,
+            SceneKind::LockedBall | SceneKind::FreeBall | SceneKind::FreeBallNoStops
+        )
     }
     fn free_ball(self) -> bool {
         matches!(self, SceneKind::FreeBall | SceneKind::FreeBallNoStops)
@@ -149,7 +152,12 @@ fn small_solve(a: &SMatrix<f64, MC, MC>, b: SVector<f64, MC>) -> Option<SVector<
 impl FullSolver {
     /// Builds the solver for `scene` with `n_elements` elements, solves the static equilibrium
     /// by load stepping and starts from it at rest, ball at `ball.initial_angle`.
-    pub fn at_rest(params: Params<f64>, scene: SceneKind, n_elements: usize, base_accel: f64) -> Result<Self, Error> {
+    pub fn at_rest(
+        params: Params<f64>,
+        scene: SceneKind,
+        n_elements: usize,
+        base_accel: f64,
+    ) -> Result<Self, Error> {
         let mut s = Self::new(params, scene, n_elements)?;
         s.solve_static()?;
         s.restart(base_accel)?;
@@ -159,10 +167,16 @@ impl FullSolver {
     /// Builds the solver in the reference configuration (no static solve).
     pub fn new(params: Params<f64>, scene: SceneKind, n_elements: usize) -> Result<Self, Error> {
         if n_elements == 0 {
-            return Err(Error::InvalidParameter { field: "n_elements", reason: "must be at least 1" });
+            return Err(Error::InvalidParameter {
+                field: "n_elements",
+                reason: "must be at least 1",
+            });
         }
         if n_elements > 100_000 {
-            return Err(Error::InvalidParameter { field: "n_elements", reason: "must be at most 100000" });
+            return Err(Error::InvalidParameter {
+                field: "n_elements",
+                reason: "must be at most 100000",
+            });
         }
         params.validate(scene.has_tip(), scene.has_ball())?;
         let n = n_elements;
@@ -173,8 +187,16 @@ impl FullSolver {
             bending_rigidity: b.modulus * b.inertia,
             mass_per_length: b.mass / b.length,
         };
-        let (mt, jt, d) = if scene.has_tip() { (params.tip.mass, params.tip.inertia, params.tip.offset) } else { (0.0, 0.0, 0.0) };
-        let (mb, jb) = if scene.has_ball() { (params.ball.mass, params.ball.inertia) } else { (0.0, 0.0) };
+        let (mt, jt, d) = if scene.has_tip() {
+            (params.tip.mass, params.tip.inertia, params.tip.offset)
+        } else {
+            (0.0, 0.0, 0.0)
+        };
+        let (mb, jb) = if scene.has_ball() {
+            (params.ball.mass, params.ball.inertia)
+        } else {
+            (0.0, 0.0)
+        };
         let rho = params.ball.path_radius();
         let bodies = Bodies {
             length: b.length,
@@ -267,7 +289,9 @@ impl FullSolver {
             SceneKind::LockedBall => Mode::Held(0.0),
             SceneKind::FreeBall | SceneKind::FreeBallNoStops => match contact {
                 Contact::Off => Mode::Free,
-                Contact::OnStop(side) => Mode::Held(side.sign::<f64>() * self.params.ball.stop_angle),
+                Contact::OnStop(side) => {
+                    Mode::Held(side.sign::<f64>() * self.params.ball.stop_angle)
+                }
             },
         }
     }
@@ -312,7 +336,14 @@ impl FullSolver {
 
     /// Dependent local positions from `C = 0` (Newton–Raphson to rounding), dependent
     /// velocities from `C_q q̇ = 0`, and `B_d = −C_d⁻¹ C_i`.
-    fn local_kin(&self, mode: Mode, qi: &[f64], vi: &[f64], warm: &[f64; NW], theta_ref: f64) -> Result<Kin, Error> {
+    fn local_kin(
+        &self,
+        mode: Mode,
+        qi: &[f64],
+        vi: &[f64],
+        warm: &[f64; NW],
+        theta_ref: f64,
+    ) -> Result<Kin, Error> {
         let ind = mode.independent();
         let dep = mode.dependent();
         let m = mode.m();
@@ -354,7 +385,10 @@ impl FullSolver {
             converged = inc <= 1e-13;
         }
         if !converged {
-            return Err(Error::NoConvergence { iterations: 60, increment: f64::NAN });
+            return Err(Error::NoConvergence {
+                iterations: 60,
+                increment: f64::NAN,
+            });
         }
         let c0 = self.bodies.constraints(&w, &zero, mode, theta_ref);
         let lu_dep = build(&c0);
@@ -381,7 +415,13 @@ impl FullSolver {
             }
         }
         let cons = self.bodies.constraints(&w, &wd, mode, theta_ref);
-        Ok(Kin { w, wd, cons, lu_dep, bd })
+        Ok(Kin {
+            w,
+            wd,
+            cons,
+            lu_dep,
+            bd,
+        })
     }
 
     /// Dependent local accelerations from the acceleration constraints `C_q q̈ = Q_d`.
@@ -396,7 +436,11 @@ impl FullSolver {
         if m > 0 {
             let mut rhs = SVector::<f64, MC>::zeros();
             for r in 0..m {
-                rhs[r] = -kin.cons.quad[r] - ind.iter().map(|&j| kin.cons.grad[r][j] * wdd[j]).sum::<f64>();
+                rhs[r] = -kin.cons.quad[r]
+                    - ind
+                        .iter()
+                        .map(|&j| kin.cons.grad[r][j] * wdd[j])
+                        .sum::<f64>();
             }
             let x = small_solve(&kin.lu_dep, rhs).ok_or(Error::Singular)?;
             for (r, &j) in dep.iter().enumerate() {
@@ -408,7 +452,13 @@ impl FullSolver {
 
     /// Reduced residual of the tip body and ball on the local independent coordinates:
     /// `B_localᵀ (M ẅ − Q_e)` over the local coordinates.
-    fn local_residual(&self, kin: &Kin, mode: Mode, ai: &[f64], g_eff: f64) -> Result<[f64; 5], Error> {
+    fn local_residual(
+        &self,
+        kin: &Kin,
+        mode: Mode,
+        ai: &[f64],
+        g_eff: f64,
+    ) -> Result<[f64; 5], Error> {
         let wdd = self.local_accel(kin, mode, ai)?;
         let (mt, mb) = self.bodies.weights;
         let mut gw = [0.0; NW];
@@ -419,7 +469,13 @@ impl FullSolver {
         gw[RB2] += mb * g_eff;
         let mut r = [0.0; 5];
         for (k, &jk) in mode.independent().iter().enumerate() {
-            r[k] = gw[jk] + mode.dependent().iter().enumerate().map(|(row, &j)| kin.bd[row][k] * gw[j]).sum::<f64>();
+            r[k] = gw[jk]
+                + mode
+                    .dependent()
+                    .iter()
+                    .enumerate()
+                    .map(|(row, &j)| kin.bd[row][k] * gw[j])
+                    .sum::<f64>();
         }
         Ok(r)
     }
@@ -474,9 +530,13 @@ impl FullSolver {
             if let (Some(jb), Some(c)) = (jac.as_mut(), ch) {
                 let je = self.me * c.c_m + self.kb * (c.c_q + c.c_v * damp) + kl * c.c_q;
                 for i in 0..8 {
-                    let Some(gi) = (4 * e + i).checked_sub(4) else { continue };
+                    let Some(gi) = (4 * e + i).checked_sub(4) else {
+                        continue;
+                    };
                     for j in 0..8 {
-                        let Some(gj) = (4 * e + j).checked_sub(4) else { continue };
+                        let Some(gj) = (4 * e + j).checked_sub(4) else {
+                            continue;
+                        };
                         jb.add(gi, gj, je[(i, j)]);
                     }
                 }
@@ -529,7 +589,9 @@ impl FullSolver {
         }
         let dep = mode.dependent();
         for (row, &j) in dep.iter().enumerate() {
-            y[self.zloc(j)] = (0..mode.independent().len()).map(|k| kin.bd[row][k] * delta[loc0 + k]).sum();
+            y[self.zloc(j)] = (0..mode.independent().len())
+                .map(|k| kin.bd[row][k] * delta[loc0 + k])
+                .sum();
         }
         let mut my = vec![0.0; nz];
         for e in 0..n {
@@ -546,7 +608,11 @@ impl FullSolver {
         }
         let mut r: Vec<f64> = (0..ni).map(|i| my[self.ind_to_z(i)]).collect();
         for k in 0..mode.independent().len() {
-            r[loc0 + k] += dep.iter().enumerate().map(|(row, &j)| kin.bd[row][k] * my[self.zloc(j)]).sum::<f64>();
+            r[loc0 + k] += dep
+                .iter()
+                .enumerate()
+                .map(|(row, &j)| kin.bd[row][k] * my[self.zloc(j)])
+                .sum::<f64>();
         }
         // Tip/ball block of the Newton matrix: central differences of the local residual.
         if let (Some(jb), Some(c)) = (jac.as_mut(), ch) {
@@ -568,12 +634,21 @@ impl FullSolver {
                         cols[side] = self.local_residual(&kp, mode, &a, g_eff)?;
                     }
                     for row in 0..nl {
-                        jb.add(loc0 + row, loc0 + k, (cols[0][row] - cols[1][row]) / (2.0 * eps));
+                        jb.add(
+                            loc0 + row,
+                            loc0 + k,
+                            (cols[0][row] - cols[1][row]) / (2.0 * eps),
+                        );
                     }
                 }
             }
         }
-        Ok(Evaluated { r, jac, kin, lambda_local })
+        Ok(Evaluated {
+            r,
+            jac,
+            kin,
+            lambda_local,
+        })
     }
 
     /// Newton–Raphson on `x` with `q = q₀ + c_q x`, `v = v₀ + c_v x`, `a = a₀ + c_m x` (the
@@ -632,10 +707,17 @@ impl FullSolver {
                 x.iter_mut().zip(dx.iter()).for_each(|(xi, d)| *xi += d);
             }
             if increment <= tol {
-                return Ok(Solved { x, iterations: it, increment });
+                return Ok(Solved {
+                    x,
+                    iterations: it,
+                    increment,
+                });
             }
         }
-        Err(Error::NoConvergence { iterations: max, increment })
+        Err(Error::NoConvergence {
+            iterations: max,
+            increment,
+        })
     }
 
     /// The full state from independent positions, velocities and accelerations.
@@ -678,7 +760,13 @@ impl FullSolver {
         if self.scene.has_ball() {
             s.theta_ref = self.bodies.orbit(&kin.w, &kin.wd, prev.theta_ref).0;
         }
-        if !(s.q.iter().chain(s.v.iter()).chain(s.a.iter()).all(|z| z.is_finite())) {
+        if !(s
+            .q
+            .iter()
+            .chain(s.v.iter())
+            .chain(s.a.iter())
+            .all(|z| z.is_finite()))
+        {
             return Err(Error::NonFiniteState);
         }
         Ok(s)
@@ -690,7 +778,11 @@ impl FullSolver {
         let mode = self.mode(Contact::Off);
         let ni = self.n_ind(mode);
         let z = vec![0.0; ni];
-        let ch = Chain { c_q: 1.0, c_v: 0.0, c_m: 0.0 };
+        let ch = Chain {
+            c_q: 1.0,
+            c_v: 0.0,
+            c_m: 0.0,
+        };
         let mut x = z.clone();
         let mut warm = self.local_of(&self.state.q);
         let mut iterations = 0;
@@ -753,7 +845,11 @@ impl FullSolver {
 
     fn consistent_acceleration(&self, s: &FullState) -> Result<Solved, Error> {
         let mode = self.mode(s.contact);
-        let ch = Chain { c_q: 0.0, c_v: 0.0, c_m: 1.0 };
+        let ch = Chain {
+            c_q: 0.0,
+            c_v: 0.0,
+            c_m: 1.0,
+        };
         let i = &self.params.integrator;
         let c_pos = i.beta * i.step * i.step;
         let qi = self.gather_ind(&s.q, mode);
@@ -761,20 +857,44 @@ impl FullSolver {
         let ai = self.gather_ind(&s.a, mode);
         let z = vec![0.0; qi.len()];
         let mut warm = self.local_of(&s.q);
-        self.newton(&qi, &vi, &z, ai, &ch, c_pos, self.effective_gravity(s.base_accel), mode, &mut warm, s.theta_ref)
+        self.newton(
+            &qi,
+            &vi,
+            &z,
+            ai,
+            &ch,
+            c_pos,
+            self.effective_gravity(s.base_accel),
+            mode,
+            &mut warm,
+            s.theta_ref,
+        )
     }
 
     /// One Newmark step of the independent coordinates.
-    fn newmark(&self, s: &FullState, h: f64, base_accel: f64) -> Result<(FullState, Solved), Error> {
+    fn newmark(
+        &self,
+        s: &FullState,
+        h: f64,
+        base_accel: f64,
+    ) -> Result<(FullState, Solved), Error> {
         let it = &self.params.integrator;
         let mode = self.mode(s.contact);
         let qi = self.gather_ind(&s.q, mode);
         let vi = self.gather_ind(&s.v, mode);
         let ai = self.gather_ind(&s.a, mode);
         let ni = qi.len();
-        let q_pred: Vec<f64> = (0..ni).map(|i| qi[i] + vi[i] * h + ai[i] * (h * h * (0.5 - it.beta))).collect();
-        let v_pred: Vec<f64> = (0..ni).map(|i| vi[i] + ai[i] * (h * (1.0 - it.gamma))).collect();
-        let ch = Chain { c_q: it.beta * h * h, c_v: it.gamma * h, c_m: 1.0 };
+        let q_pred: Vec<f64> = (0..ni)
+            .map(|i| qi[i] + vi[i] * h + ai[i] * (h * h * (0.5 - it.beta)))
+            .collect();
+        let v_pred: Vec<f64> = (0..ni)
+            .map(|i| vi[i] + ai[i] * (h * (1.0 - it.gamma)))
+            .collect();
+        let ch = Chain {
+            c_q: it.beta * h * h,
+            c_v: it.gamma * h,
+            c_m: 1.0,
+        };
         let z = vec![0.0; ni];
         let mut warm = self.local_of(&s.q);
         let solved = self.newton(
@@ -818,14 +938,26 @@ impl FullSolver {
     /// Fraction τ ∈ [0, 1] of the step at which α reaches `target`: root of the cubic Hermite
     /// interpolant of α through both step ends with their rates (as the core).
     fn crossing_fraction(&self, start: &FullState, end: &FullState, h: f64, target: f64) -> f64 {
-        let (a0, a1) = (self.relative_angle(start) - target, self.relative_angle(end) - target);
+        let (a0, a1) = (
+            self.relative_angle(start) - target,
+            self.relative_angle(end) - target,
+        );
         let (d0, d1) = (self.relative_rate(start) * h, self.relative_rate(end) * h);
         let linear = a0 / (a0 - a1);
-        let mut tau = if linear.is_finite() { linear.clamp(0.0, 1.0) } else { 0.0 };
+        let mut tau = if linear.is_finite() {
+            linear.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         for _ in 0..6 {
             let (t2, t3) = (tau * tau, tau * tau * tau);
-            let p = (2.0 * t3 - 3.0 * t2 + 1.0) * a0 + (t3 - 2.0 * t2 + tau) * d0 + (3.0 * t2 - 2.0 * t3) * a1 + (t3 - t2) * d1;
-            let dp = (6.0 * t2 - 6.0 * tau) * (a0 - a1) + (3.0 * t2 - 4.0 * tau + 1.0) * d0 + (3.0 * t2 - 2.0 * tau) * d1;
+            let p = (2.0 * t3 - 3.0 * t2 + 1.0) * a0
+                + (t3 - 2.0 * t2 + tau) * d0
+                + (3.0 * t2 - 2.0 * t3) * a1
+                + (t3 - t2) * d1;
+            let dp = (6.0 * t2 - 6.0 * tau) * (a0 - a1)
+                + (3.0 * t2 - 4.0 * tau + 1.0) * d0
+                + (3.0 * t2 - 2.0 * tau) * d1;
             if !(dp.abs() > 0.0) {
                 break;
             }
@@ -849,7 +981,16 @@ impl FullSolver {
         let vi = self.gather_ind(&s.v, mode);
         let ai = self.gather_ind(&s.a, mode);
         let mut warm = self.local_of(&s.q);
-        let ev = self.evaluate(&qi, &vi, &ai, self.effective_gravity(s.base_accel), mode, &mut warm, s.theta_ref, None)?;
+        let ev = self.evaluate(
+            &qi,
+            &vi,
+            &ai,
+            self.effective_gravity(s.base_accel),
+            mode,
+            &mut warm,
+            s.theta_ref,
+            None,
+        )?;
         Ok(-ev.lambda_local[5])
     }
 
@@ -861,13 +1002,24 @@ impl FullSolver {
         let h = self.params.integrator.step;
         let start = self.state.clone();
         let (mut next, solved) = self.newmark(&start, h, base_accel)?;
-        let mut report = StepReport { iterations: solved.iterations, increment: solved.increment, impact: None };
+        let mut report = StepReport {
+            iterations: solved.iterations,
+            increment: solved.increment,
+            impact: None,
+        };
         if self.scene.stops() {
             match next.contact {
                 Contact::Off => {
                     let alpha1 = self.relative_angle(&next);
                     if alpha1.abs() > self.params.ball.stop_angle {
-                        next = self.step_with_impact(&start, &next, h, base_accel, alpha1, &mut report)?;
+                        next = self.step_with_impact(
+                            &start,
+                            &next,
+                            h,
+                            base_accel,
+                            alpha1,
+                            &mut report,
+                        )?;
                     }
                 }
                 Contact::OnStop(side) => {
@@ -891,7 +1043,11 @@ impl FullSolver {
         report: &mut StepReport<f64>,
     ) -> Result<FullState, Error> {
         let stop = self.params.ball.stop_angle;
-        let side = if alpha1 > 0.0 { Side::Positive } else { Side::Negative };
+        let side = if alpha1 > 0.0 {
+            Side::Positive
+        } else {
+            Side::Negative
+        };
         let target = side.sign::<f64>() * stop;
         let tau = self.crossing_fraction(start, trial, h, target);
         let h1 = tau * h;
@@ -918,7 +1074,11 @@ impl FullSolver {
             mid
         };
         if end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
-            let side2 = if self.relative_angle(&end) > 0.0 { Side::Positive } else { Side::Negative };
+            let side2 = if self.relative_angle(&end) > 0.0 {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
             end = self.hold(&end, side2)?;
             let acc = self.consistent_acceleration(&end)?;
             end = self.with_accel(&end, &acc.x)?;
@@ -961,22 +1121,56 @@ impl FullSolver {
         let ni = qi.len();
         let mut grad = vec![0.0; ni];
         for (k, &jk) in mode.independent().iter().enumerate() {
-            grad[loc0 + k] = g[jk] + mode.dependent().iter().enumerate().map(|(r, &j)| kin.bd[r][k] * g[j]).sum::<f64>();
+            grad[loc0 + k] = g[jk]
+                + mode
+                    .dependent()
+                    .iter()
+                    .enumerate()
+                    .map(|(r, &j)| kin.bd[r][k] * g[j])
+                    .sum::<f64>();
         }
         let speed: f64 = grad.iter().zip(vi.iter()).map(|(a, b)| a * b).sum();
-        let mut impact = Impact { time: s.time, side, relative_speed: speed, impulse: 0.0, energy_loss: 0.0, stuck: false };
+        let mut impact = Impact {
+            time: s.time,
+            side,
+            relative_speed: speed,
+            impulse: 0.0,
+            energy_loss: 0.0,
+            stuck: false,
+        };
         let plastic = speed.abs() < ball.stick_speed;
         if side.sign::<f64>() * speed > 0.0 {
             let e = if plastic { 0.0 } else { ball.restitution };
             let it = &self.params.integrator;
             let ch = if ball.impact_model == ImpactModel::OverStep {
-                Chain { c_q: it.beta * it.step * it.step, c_v: it.gamma * it.step, c_m: 1.0 }
+                Chain {
+                    c_q: it.beta * it.step * it.step,
+                    c_v: it.gamma * it.step,
+                    c_m: 1.0,
+                }
             } else {
-                Chain { c_q: 0.0, c_v: 0.0, c_m: 1.0 }
+                Chain {
+                    c_q: 0.0,
+                    c_v: 0.0,
+                    c_m: 1.0,
+                }
             };
             let mut warm = w;
-            let ev = self.evaluate(&qi, &vi, &ai, self.effective_gravity(s.base_accel), mode, &mut warm, s.theta_ref, Some(&ch))?;
-            let lu = ev.jac.ok_or(Error::Singular)?.factor().ok_or(Error::Singular)?;
+            let ev = self.evaluate(
+                &qi,
+                &vi,
+                &ai,
+                self.effective_gravity(s.base_accel),
+                mode,
+                &mut warm,
+                s.theta_ref,
+                Some(&ch),
+            )?;
+            let lu = ev
+                .jac
+                .ok_or(Error::Singular)?
+                .factor()
+                .ok_or(Error::Singular)?;
             let mut y = grad.clone();
             if !lu.solve(&mut y) {
                 return Err(Error::Singular);
@@ -986,7 +1180,9 @@ impl FullSolver {
                 return Err(Error::Singular);
             }
             let lambda = -(1.0 + e) * speed / wgt;
-            vi.iter_mut().zip(y.iter()).for_each(|(v, yy)| *v += yy * lambda);
+            vi.iter_mut()
+                .zip(y.iter())
+                .for_each(|(v, yy)| *v += yy * lambda);
             *s = self.complete(&qi, &vi, &ai, mode, s, s.time, s.base_accel, Contact::Off)?;
             impact.impulse = lambda / ball.path_radius();
             impact.energy_loss = 0.5 * (1.0 - e * e) * speed * speed / wgt;
@@ -1030,12 +1226,38 @@ impl FullSolver {
         let g = self.params.gravity;
         let mut warm = self.local_of(&s.q);
         let m = self
-            .evaluate(&qi, &z, &z, g, mode, &mut warm, s.theta_ref, Some(&Chain { c_q: 0.0, c_v: 0.0, c_m: 1.0 }))?
+            .evaluate(
+                &qi,
+                &z,
+                &z,
+                g,
+                mode,
+                &mut warm,
+                s.theta_ref,
+                Some(&Chain {
+                    c_q: 0.0,
+                    c_v: 0.0,
+                    c_m: 1.0,
+                }),
+            )?
             .jac
             .ok_or(Error::Singular)?
             .to_dense();
         let k = self
-            .evaluate(&qi, &z, &z, g, mode, &mut warm, s.theta_ref, Some(&Chain { c_q: 1.0, c_v: 0.0, c_m: 0.0 }))?
+            .evaluate(
+                &qi,
+                &z,
+                &z,
+                g,
+                mode,
+                &mut warm,
+                s.theta_ref,
+                Some(&Chain {
+                    c_q: 1.0,
+                    c_v: 0.0,
+                    c_m: 0.0,
+                }),
+            )?
             .jac
             .ok_or(Error::Singular)?
             .to_dense();
@@ -1047,9 +1269,15 @@ impl FullSolver {
         let (m, k) = self.linearized()?;
         let l = m.cholesky().ok_or(Error::Singular)?.l();
         let x = l.solve_lower_triangular(&k).ok_or(Error::Singular)?;
-        let a = l.solve_lower_triangular(&x.transpose()).ok_or(Error::Singular)?;
+        let a = l
+            .solve_lower_triangular(&x.transpose())
+            .ok_or(Error::Singular)?;
         let a = (&a + a.transpose()) * 0.5;
-        let mut ev: Vec<f64> = a.symmetric_eigenvalues().iter().map(|l| l.max(0.0).sqrt() / (2.0 * core::f64::consts::PI)).collect();
+        let mut ev: Vec<f64> = a
+            .symmetric_eigenvalues()
+            .iter()
+            .map(|l| l.max(0.0).sqrt() / (2.0 * core::f64::consts::PI))
+            .collect();
         ev.sort_by(|a, b| a.total_cmp(b));
         Ok(ev)
     }
@@ -1066,8 +1294,16 @@ impl FullSolver {
             let u = ElementVector::<f64>::from_fn(|i, _| s.q[4 * e + i]);
             beam -= unit.dot(&u);
         }
-        let tip = if self.n_body >= 3 { s.q[self.zloc(RT2)] } else { 0.0 };
-        let ball = if self.n_body >= 6 { s.q[self.zloc(RB2)] } else { 0.0 };
+        let tip = if self.n_body >= 3 {
+            s.q[self.zloc(RT2)]
+        } else {
+            0.0
+        };
+        let ball = if self.n_body >= 6 {
+            s.q[self.zloc(RB2)]
+        } else {
+            0.0
+        };
         (beam, tip, ball)
     }
 
@@ -1192,24 +1428,42 @@ mod tests {
             ai[i] = 20.0 * (0.7 * f).sin();
         }
         vi[ni - 1] = -30.0;
-        let ch = Chain { c_q: 0.36 * 9e-6, c_v: 0.7 * 3e-3, c_m: 1.0 };
+        let ch = Chain {
+            c_q: 0.36 * 9e-6,
+            c_v: 0.7 * 3e-3,
+            c_m: 1.0,
+        };
         let mut warm = s.local_of(&s.equilibrium.q);
-        let ev = s.evaluate(&qi, &vi, &ai, 9.0, mode, &mut warm, 0.0, Some(&ch)).expect("eval");
+        let ev = s
+            .evaluate(&qi, &vi, &ai, 9.0, mode, &mut warm, 0.0, Some(&ch))
+            .expect("eval");
         let jac = ev.jac.expect("jac").to_dense();
         let scale = jac.amax();
         for j in 0..ni {
             let h = 1e-2;
             let pert = |sg: f64| {
-                let q: Vec<f64> = (0..ni).map(|i| qi[i] + if i == j { sg * h * ch.c_q } else { 0.0 }).collect();
-                let v: Vec<f64> = (0..ni).map(|i| vi[i] + if i == j { sg * h * ch.c_v } else { 0.0 }).collect();
-                let a: Vec<f64> = (0..ni).map(|i| ai[i] + if i == j { sg * h * ch.c_m } else { 0.0 }).collect();
+                let q: Vec<f64> = (0..ni)
+                    .map(|i| qi[i] + if i == j { sg * h * ch.c_q } else { 0.0 })
+                    .collect();
+                let v: Vec<f64> = (0..ni)
+                    .map(|i| vi[i] + if i == j { sg * h * ch.c_v } else { 0.0 })
+                    .collect();
+                let a: Vec<f64> = (0..ni)
+                    .map(|i| ai[i] + if i == j { sg * h * ch.c_m } else { 0.0 })
+                    .collect();
                 let mut w = warm;
-                s.evaluate(&q, &v, &a, 9.0, mode, &mut w, 0.0, None).expect("eval").r
+                s.evaluate(&q, &v, &a, 9.0, mode, &mut w, 0.0, None)
+                    .expect("eval")
+                    .r
             };
             let (rp, rm) = (pert(1.0), pert(-1.0));
             for i in 0..ni {
                 let fd = (rp[i] - rm[i]) / (2.0 * h);
-                assert!((fd - jac[(i, j)]).abs() <= 1e-6 * scale, "J[{i},{j}] {} vs fd {fd}", jac[(i, j)]);
+                assert!(
+                    (fd - jac[(i, j)]).abs() <= 1e-6 * scale,
+                    "J[{i},{j}] {} vs fd {fd}",
+                    jac[(i, j)]
+                );
             }
         }
     }
