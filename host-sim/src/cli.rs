@@ -101,8 +101,8 @@ impl SceneArgs {
                 f.excitation.kind = ExcitationType::Harmonic;
                 f.excitation.file = None;
             }
-            f.excitation.frequency = self.frequency.or(f.excitation.frequency).or(Some(4.13));
-            f.excitation.amplitude = self.amplitude.or(f.excitation.amplitude).or(Some(0.5e-3));
+            f.excitation.frequency = self.frequency.or(f.excitation.frequency);
+            f.excitation.amplitude = self.amplitude.or(f.excitation.amplitude);
         }
         if let Some(v) = self.duration {
             f.duration = v;
@@ -216,7 +216,13 @@ pub struct PaperArgs {
 
 /// Runs the parsed command line.
 pub fn main(cli: Cli) -> Result<()> {
-    match cli.command.unwrap_or(Command::Paper(PaperArgs { scene: SceneArgs { scene: "paper".into(), ..Default::default() }, json: false })) {
+    match cli.command.unwrap_or(Command::Paper(PaperArgs {
+        scene: SceneArgs {
+            scene: "paper".into(),
+            ..Default::default()
+        },
+        json: false,
+    })) {
         Command::Paper(a) => paper(&a),
         Command::Static(a) => static_cmd(&a),
         Command::Modes(a) => modes(&a),
@@ -231,12 +237,17 @@ fn describe(s: &Scene) -> String {
     let exc = match f.excitation.kind {
         ExcitationType::Harmonic => format!(
             "base {:.3} mm at {} Hz",
-            f.excitation.amplitude.unwrap_or(0.0) * 1e3,
-            f.excitation.frequency.unwrap_or(0.0)
+            f.excitation.amplitude_or_paper() * 1e3,
+            f.excitation.frequency_or_paper()
         ),
         ExcitationType::Csv => format!(
             "base acceleration from {}",
-            f.excitation.file.as_deref().map(Path::display).map(|d| d.to_string()).unwrap_or_default()
+            f.excitation
+                .file
+                .as_deref()
+                .map(Path::display)
+                .map(|d| d.to_string())
+                .unwrap_or_default()
         ),
     };
     format!(
@@ -260,7 +271,10 @@ fn static_cmd(a: &InfoArgs) -> Result<()> {
     let sim = crate::run::build_simulator(&s, 0.0)?;
     let d = sim.static_tip_deflection();
     if a.json {
-        println!("{}", json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "static_tip_deflection": d }));
+        println!(
+            "{}",
+            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "static_tip_deflection": d })
+        );
     } else {
         println!("{}", describe(&s));
         println!("static tip deflection: {d:.6e} m ({:.3} mm)", d * 1e3);
@@ -271,10 +285,15 @@ fn static_cmd(a: &InfoArgs) -> Result<()> {
 fn modes(a: &ModesArgs) -> Result<()> {
     let s = a.scene.load()?;
     let sim = crate::run::build_simulator(&s, 0.0)?;
-    let f = sim.natural_frequencies().map_err(|e| crate::scene::map_core_error(e, &s))?;
+    let f = sim
+        .natural_frequencies()
+        .map_err(|e| crate::scene::map_core_error(e, &s))?;
     let f: Vec<f64> = f.into_iter().take(a.count).collect();
     if a.json {
-        println!("{}", json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "frequencies": f }));
+        println!(
+            "{}",
+            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "frequencies": f })
+        );
     } else {
         println!("{}", describe(&s));
         for (i, x) in f.iter().enumerate() {
@@ -282,7 +301,10 @@ fn modes(a: &ModesArgs) -> Result<()> {
         }
         if s.file.kind.free_ball() {
             let p = s.params()?;
-            println!("(ball on a fixed housing: {:.4} Hz)", p.ball.fixed_housing_frequency(p.gravity));
+            println!(
+                "(ball on a fixed housing: {:.4} Hz)",
+                p.ball.fixed_housing_frequency(p.gravity)
+            );
         }
     }
     Ok(())
@@ -305,10 +327,18 @@ fn summary(rows: &[Row], transient: f64) -> serde_json::Value {
     let strain0 = rows.first().map(|r| r.energies.beam_strain).unwrap_or(0.0);
     let from = transient.min(end);
     let max_abs = |f: &dyn Fn(&Row) -> f64, a: f64, b: f64| {
-        rows.iter().filter(|r| r.t >= a && r.t <= b).map(f).filter(|x| x.is_finite()).fold(f64::NAN, |m, x| m.max(x.abs()))
+        rows.iter()
+            .filter(|r| r.t >= a && r.t <= b)
+            .map(f)
+            .filter(|x| x.is_finite())
+            .fold(f64::NAN, |m, x| m.max(x.abs()))
     };
     let mean = |f: &dyn Fn(&Row) -> f64, a: f64, b: f64| {
-        let v: Vec<f64> = rows.iter().filter(|r| r.t >= a && r.t <= b).map(f).collect();
+        let v: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.t >= a && r.t <= b)
+            .map(f)
+            .collect();
         if v.is_empty() {
             f64::NAN
         } else {
@@ -316,7 +346,9 @@ fn summary(rows: &[Row], transient: f64) -> serde_json::Value {
         }
     };
     let static_d = rows.first().map(|r| r.tip_deflection).unwrap_or(f64::NAN);
-    let beam = |r: &Row| r.energies.beam_strain - strain0 + r.energies.beam_kinetic + r.energies.beam_potential;
+    let beam = |r: &Row| {
+        r.energies.beam_strain - strain0 + r.energies.beam_kinetic + r.energies.beam_potential
+    };
     let ball = |r: &Row| r.energies.ball_kinetic + r.energies.ball_potential;
     let w = 10.0f64.min(end / 2.0);
     json!({
@@ -342,7 +374,10 @@ fn num(v: &serde_json::Value, k: &str) -> f64 {
 
 fn print_summary(s: &serde_json::Value, transient: f64) {
     let w = num(s, "energy_window");
-    println!("static tip deflection      {:.3} mm", 1e3 * num(s, "static_tip_deflection"));
+    println!(
+        "static tip deflection      {:.3} mm",
+        1e3 * num(s, "static_tip_deflection")
+    );
     println!(
         "tip amplitude              max {:.3} mm; steady (t ≥ {transient} s, half peak-to-peak) {:.3} mm",
         1e3 * num(s, "tip_amplitude_max"),
@@ -368,7 +403,9 @@ fn paper(a: &PaperArgs) -> Result<()> {
     let s = a.scene.load()?;
     let transient = s.file.outputs.transient.min(s.file.duration / 2.0);
     let sim = crate::run::build_simulator(&s, 0.0)?;
-    let freqs = sim.natural_frequencies().map_err(|e| crate::scene::map_core_error(e, &s))?;
+    let freqs = sim
+        .natural_frequencies()
+        .map_err(|e| crate::scene::map_core_error(e, &s))?;
     let pb = progress_bar(s.steps() as u64, "free ball");
     let rows = run_rows(&s, |k| pb.set_position(k as u64))?;
     pb.finish_and_clear();
@@ -410,7 +447,8 @@ fn run(a: &RunArgs) -> Result<()> {
     let s = a.scene.load()?;
     let f = &s.file;
     let dir = a.out.clone().unwrap_or_else(|| f.outputs.directory.clone());
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory `{}`", dir.display()))?;
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create output directory `{}`", dir.display()))?;
     let transient = a.transient.unwrap_or(f.outputs.transient);
     let every = a.every.unwrap_or(f.outputs.every);
     if every == 0 {
@@ -422,7 +460,11 @@ fn run(a: &RunArgs) -> Result<()> {
     let stem = f.name.replace(['/', '\\', ' '], "_");
     let csv = dir.join(format!("{stem}.csv"));
     write_csv(&csv, &rows, every)?;
-    let plots = if a.no_plots { Vec::new() } else { a.plots.clone().unwrap_or_else(|| f.outputs.plots.clone()) };
+    let plots = if a.no_plots {
+        Vec::new()
+    } else {
+        a.plots.clone().unwrap_or_else(|| f.outputs.plots.clone())
+    };
     let title = describe(&s);
     let pngs = run_plots(&dir, &stem, &title, &rows, &plots, transient)?;
     let sum = summary(&rows, transient);
@@ -449,9 +491,16 @@ fn sweep_cmd(a: &SweepArgs) -> Result<()> {
     if a.scene.duration.is_none() && a.scene.scene == "paper" {
         s.file.duration = 60.0;
     }
-    let freqs = a.freqs.clone().unwrap_or_else(|| PAPER_FREQUENCIES.to_vec());
-    let dir = a.out.clone().unwrap_or_else(|| s.file.outputs.directory.clone());
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create output directory `{}`", dir.display()))?;
+    let freqs = a
+        .freqs
+        .clone()
+        .unwrap_or_else(|| PAPER_FREQUENCIES.to_vec());
+    let dir = a
+        .out
+        .clone()
+        .unwrap_or_else(|| s.file.outputs.directory.clone());
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create output directory `{}`", dir.display()))?;
     if !a.last.is_finite() || a.last <= 0.0 {
         anyhow::bail!("invalid value for `--last`: {} (must be positive)", a.last);
     }
@@ -460,13 +509,17 @@ fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         pool = pool.num_threads(j.max(1));
     }
     let pool = pool.build()?;
-    let pb = progress_bar((freqs.len() * s.steps()) as u64, &format!("sweep ({} threads)", pool.current_num_threads()));
+    let pb = progress_bar(
+        (freqs.len() * s.steps()) as u64,
+        &format!("sweep ({} threads)", pool.current_num_threads()),
+    );
     let t0 = Instant::now();
     let points = pool.install(|| sweep(&s, &freqs, a.last, &|n| pb.inc(n)))?;
     pb.finish_and_clear();
     let wall = t0.elapsed().as_secs_f64();
     let csv_path = dir.join("sweep.csv");
-    std::fs::write(&csv_path, crate::sweep::csv(&points)).with_context(|| format!("cannot write `{}`", csv_path.display()))?;
+    std::fs::write(&csv_path, crate::sweep::csv(&points))
+        .with_context(|| format!("cannot write `{}`", csv_path.display()))?;
     let mut png = None;
     if !a.no_plots {
         use crate::plot::{render, Panel, Series};
@@ -474,21 +527,37 @@ fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         let ok: Vec<_> = points.iter().collect();
         render(
             &path,
-            &format!("Frequency response, last {} s of {} s runs ({})", a.last, s.file.duration, describe(&s)),
+            &format!(
+                "Frequency response, last {} s of {} s runs ({})",
+                a.last,
+                s.file.duration,
+                describe(&s)
+            ),
             &[
                 Panel::new(
                     "Beam tip",
                     "excitation frequency [Hz]",
                     "Y (half peak-to-peak) [m]",
-                    vec![Series::marked("", ok.iter().map(|p| (p.frequency, p.tip_amplitude)).collect())],
+                    vec![Series::marked(
+                        "",
+                        ok.iter().map(|p| (p.frequency, p.tip_amplitude)).collect(),
+                    )],
                 ),
                 Panel::new(
                     "Ball",
                     "excitation frequency [Hz]",
                     "θ [deg]",
                     vec![
-                        Series::marked("max |θ|", ok.iter().map(|p| (p.frequency, p.ball_max_deg)).collect()),
-                        Series::marked("half peak-to-peak", ok.iter().map(|p| (p.frequency, p.ball_amplitude_deg)).collect()),
+                        Series::marked(
+                            "max |θ|",
+                            ok.iter().map(|p| (p.frequency, p.ball_max_deg)).collect(),
+                        ),
+                        Series::marked(
+                            "half peak-to-peak",
+                            ok.iter()
+                                .map(|p| (p.frequency, p.ball_amplitude_deg))
+                                .collect(),
+                        ),
                     ],
                 ),
             ],
@@ -499,7 +568,10 @@ fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         png = Some(path);
     }
     if a.json {
-        println!("{}", json!({ "scene": s.file.name, "duration": s.file.duration, "last": a.last, "points": points, "csv": csv_path, "plot": png, "wall_time": wall }));
+        println!(
+            "{}",
+            json!({ "scene": s.file.name, "duration": s.file.duration, "last": a.last, "points": points, "csv": csv_path, "plot": png, "wall_time": wall })
+        );
     } else {
         println!("{}", describe(&s));
         println!("  f [Hz]   tip Y [mm]   ball max|θ| [deg]   ball θ half p-p [deg]   impacts");
@@ -511,14 +583,21 @@ fn sweep_cmd(a: &SweepArgs) -> Result<()> {
                 p.ball_max_deg,
                 p.ball_amplitude_deg,
                 p.impacts,
-                p.error.as_deref().map(|e| format!("   FAILED: {e}")).unwrap_or_default()
+                p.error
+                    .as_deref()
+                    .map(|e| format!("   FAILED: {e}"))
+                    .unwrap_or_default()
             );
         }
         println!("wrote {}", csv_path.display());
         if let Some(p) = &png {
             println!("wrote {}", p.display());
         }
-        println!("wall time {wall:.2} s ({} runs on {} threads)", points.len(), pool.current_num_threads());
+        println!(
+            "wall time {wall:.2} s ({} runs on {} threads)",
+            points.len(),
+            pool.current_num_threads()
+        );
     }
     Ok(())
 }
@@ -544,9 +623,19 @@ fn tune_cmd(a: &TuneArgs) -> Result<()> {
         println!("{}", serde_json::to_string(&t)?);
     } else {
         println!("{}", describe(&s));
-        println!("tuned track radius R       {:.6} mm (ρ = R − r_b = {:.6} mm)", t.track_radius * 1e3, t.path_radius * 1e3);
-        println!("coupled model              ball {:.4} Hz, beam {:.4} Hz, ratio {:.6}", t.ball_frequency, t.beam_frequency, t.ratio);
-        println!("ball on a fixed housing    {:.4} Hz;  locked-ball first frequency {:.4} Hz", t.fixed_housing_frequency, t.locked_frequency);
+        println!(
+            "tuned track radius R       {:.6} mm (ρ = R − r_b = {:.6} mm)",
+            t.track_radius * 1e3,
+            t.path_radius * 1e3
+        );
+        println!(
+            "coupled model              ball {:.4} Hz, beam {:.4} Hz, ratio {:.6}",
+            t.ball_frequency, t.beam_frequency, t.ratio
+        );
+        println!(
+            "ball on a fixed housing    {:.4} Hz;  locked-ball first frequency {:.4} Hz",
+            t.fixed_housing_frequency, t.locked_frequency
+        );
         if let Some(p) = &a.write {
             println!("wrote {}", p.display());
         }

@@ -5,8 +5,8 @@
 use crate::scene::{Kind, Precision};
 use crate::sim::{Observation, Simulator};
 use absorber_core::{
-    BallParams, BeamOnly, BeamParams, Damping, Energies, Error, FreeBall, FreeBallNoStops, Impact, Integrator,
-    LockedBall, Model, Params, Real, Scene, StepReport, TipMass, TipParams,
+    BallParams, BeamOnly, BeamParams, Damping, Energies, Error, FreeBall, FreeBallNoStops, Impact,
+    Integrator, LockedBall, Model, Params, Real, Scene, StepReport, TipMass, TipParams,
 };
 
 /// A core model of any scene, size and scalar.
@@ -30,7 +30,9 @@ fn energies_f64<T: Real>(e: Energies<T>) -> Energies<f64> {
     }
 }
 
-impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator for CoreSim<T, S, N, D> {
+impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator
+    for CoreSim<T, S, N, D>
+{
     fn step(&mut self, base_accel: f64) -> Result<StepReport<f64>, Error> {
         let r = self.model.step(absorber_core::scalar::lit(base_accel))?;
         Ok(StepReport {
@@ -50,8 +52,14 @@ impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator 
     fn observe(&self) -> Observation {
         let m = &self.model;
         let (psi, psi_dot) = m.tip_angle();
-        let (th, thd) = m.ball_angle().map(|(a, b)| (f64_of(a), f64_of(b))).unwrap_or((f64::NAN, f64::NAN));
-        let (al, ald) = m.ball_relative_angle().map(|(a, b)| (f64_of(a), f64_of(b))).unwrap_or((f64::NAN, f64::NAN));
+        let (th, thd) = m
+            .ball_angle()
+            .map(|(a, b)| (f64_of(a), f64_of(b)))
+            .unwrap_or((f64::NAN, f64::NAN));
+        let (al, ald) = m
+            .ball_relative_angle()
+            .map(|(a, b)| (f64_of(a), f64_of(b)))
+            .unwrap_or((f64::NAN, f64::NAN));
         Observation {
             time: f64_of(m.time()),
             tip_deflection: f64_of(m.tip_deflection()),
@@ -67,11 +75,19 @@ impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator 
 
     fn energies(&self, base_velocity: f64, base_displacement: f64) -> Energies<f64> {
         let lit = absorber_core::scalar::lit::<T>;
-        energies_f64(self.model.energies(lit(base_velocity), lit(base_displacement)))
+        energies_f64(
+            self.model
+                .energies(lit(base_velocity), lit(base_displacement)),
+        )
     }
 
     fn natural_frequencies(&self) -> Result<Vec<f64>, Error> {
-        Ok(self.model.natural_frequencies()?.iter().map(|&f| f64_of(f)).collect())
+        Ok(self
+            .model
+            .natural_frequencies()?
+            .iter()
+            .map(|&f| f64_of(f))
+            .collect())
     }
 
     fn static_tip_deflection(&self) -> f64 {
@@ -94,7 +110,11 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             modulus: p.beam.modulus as f32,
             inertia: p.beam.inertia as f32,
         },
-        tip: TipParams { mass: p.tip.mass as f32, inertia: p.tip.inertia as f32, offset: p.tip.offset as f32 },
+        tip: TipParams {
+            mass: p.tip.mass as f32,
+            inertia: p.tip.inertia as f32,
+            offset: p.tip.offset as f32,
+        },
         ball: BallParams {
             mass: b.mass as f32,
             inertia: b.inertia as f32,
@@ -113,7 +133,9 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             tolerance: p.integrator.tolerance as f32,
             max_iterations: p.integrator.max_iterations,
         },
-        damping: Damping { stiffness_proportional: p.damping.stiffness_proportional as f32 },
+        damping: Damping {
+            stiffness_proportional: p.damping.stiffness_proportional as f32,
+        },
         gravity: p.gravity as f32,
     }
 }
@@ -122,7 +144,9 @@ fn boxed<T: Real + Send, S: Scene + Send, const N: usize, const D: usize>(
     params: Params<T>,
     base_accel0: T,
 ) -> Result<Box<dyn Simulator>, Error> {
-    Ok(Box::new(CoreSim { model: Model::<T, S, N, D>::at_rest(params, base_accel0)? }))
+    Ok(Box::new(CoreSim {
+        model: Model::<T, S, N, D>::at_rest(params, base_accel0)?,
+    }))
 }
 
 macro_rules! by_elements {
@@ -135,7 +159,10 @@ macro_rules! by_elements {
             6 => boxed::<$t, $s, 6, { 24 + $extra }>($p, $a),
             8 => boxed::<$t, $s, 8, { 32 + $extra }>($p, $a),
             16 => boxed::<$t, $s, 16, { 64 + $extra }>($p, $a),
-            _ => Err(Error::InvalidParameter { field: "elements", reason: "supported: 1, 2, 3, 4, 6, 8, 16" }),
+            _ => Err(Error::InvalidParameter {
+                field: "elements",
+                reason: "supported: 1, 2, 3, 4, 6, 8, 16",
+            }),
         }
     };
 }

@@ -3,7 +3,7 @@
 //! Everything is sampled on the step grid t_k = k h. The solver's input is the base
 //! acceleration ÿ_b(t_k) \[m/s²\]; velocity ẏ_b and displacement y_b (for the absolute tip
 //! position and the energies) are closed form for the harmonic case and integrated by the
-//! trapezoidal rule from zero for a CSV.
+//! trapezoidal rule for a CSV, with zero mean velocity and displacement over the record.
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -26,9 +26,9 @@ pub enum Excitation {
         step: f64,
         /// ÿ_b(t_k).
         accel: Vec<f64>,
-        /// ẏ_b(t_k) (trapezoidal integral from 0).
+        /// ẏ_b(t_k) (trapezoidal integral, zero mean).
         velocity: Vec<f64>,
-        /// y_b(t_k) (trapezoidal integral from 0).
+        /// y_b(t_k) (trapezoidal integral of ẏ_b, zero mean).
         displacement: Vec<f64>,
     },
 }
@@ -47,18 +47,35 @@ pub struct Base {
 impl Excitation {
     /// Harmonic excitation.
     pub fn harmonic(amplitude: f64, frequency: f64, step: f64) -> Self {
-        Self::Harmonic { amplitude, frequency, step }
+        Self::Harmonic {
+            amplitude,
+            frequency,
+            step,
+        }
     }
 
     /// Base state at grid point `k` (t = k h). A sampled excitation holds its last value.
     pub fn at(&self, k: usize) -> Base {
         match self {
-            Self::Harmonic { amplitude, frequency, step } => {
+            Self::Harmonic {
+                amplitude,
+                frequency,
+                step,
+            } => {
                 let w = std::f64::consts::TAU * frequency;
                 let (s, c) = (w * k as f64 * step).sin_cos();
-                Base { accel: -amplitude * w * w * s, velocity: amplitude * w * c, displacement: amplitude * s }
+                Base {
+                    accel: -amplitude * w * w * s,
+                    velocity: amplitude * w * c,
+                    displacement: amplitude * s,
+                }
             }
-            Self::Sampled { accel, velocity, displacement, .. } => {
+            Self::Sampled {
+                accel,
+                velocity,
+                displacement,
+                ..
+            } => {
                 let i = k.min(accel.len().saturating_sub(1));
                 Base {
                     accel: accel.get(i).copied().unwrap_or(0.0),
@@ -70,7 +87,7 @@ impl Excitation {
     }
 
     /// Number of grid points available (`None`: unbounded).
-    pub fn len(&self) -> Option<usize> {
+    pub fn samples(&self) -> Option<usize> {
         match self {
             Self::Harmonic { .. } => None,
             Self::Sampled { accel, .. } => Some(accel.len()),
@@ -80,8 +97,10 @@ impl Excitation {
     /// Reads a CSV of `t, accel` and resamples it to the grid t_k = k h, k = 0 … `steps`
     /// (`steps = None`: as far as the file reaches). See [`Excitation::from_csv_text`].
     pub fn from_csv(path: &Path, step: f64, steps: Option<usize>) -> Result<Self> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read excitation CSV `{}`", path.display()))?;
-        Self::from_csv_text(&text, step, steps).with_context(|| format!("excitation CSV `{}`", path.display()))
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read excitation CSV `{}`", path.display()))?;
+        Self::from_csv_text(&text, step, steps)
+            .with_context(|| format!("excitation CSV `{}`", path.display()))
     }
 
     /// Parses CSV text: two columns `t [s], accel [m/s²]`, separated by a comma (or
@@ -97,8 +116,10 @@ impl Excitation {
             if line.is_empty() || line.starts_with('#') {
                 continue;
             }
-            let cols: Vec<&str> =
-                line.split(|c: char| c == ',' || c == ';' || c.is_whitespace()).filter(|s| !s.is_empty()).collect();
+            let cols: Vec<&str> = line
+                .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
+                .filter(|s| !s.is_empty())
+                .collect();
             let parsed: Option<Vec<f64>> = cols.iter().map(|c| c.parse::<f64>().ok()).collect();
             let Some(vals) = parsed else {
                 if t.is_empty() && n == first_content_line(text) {
@@ -107,7 +128,11 @@ impl Excitation {
                 bail!("line {}: not a number in `{line}`", n + 1);
             };
             if vals.len() != 2 {
-                bail!("line {}: expected 2 columns (t, accel), found {}", n + 1, vals.len());
+                bail!(
+                    "line {}: expected 2 columns (t, accel), found {}",
+                    n + 1,
+                    vals.len()
+                );
             }
             let (ti, ai) = (vals[0], vals[1]);
             if !ti.is_finite() || !ai.is_finite() {
@@ -115,10 +140,18 @@ impl Excitation {
             }
             if let Some(&prev) = t.last() {
                 if ti <= prev {
-                    bail!("line {}: time {ti} does not increase (previous {prev})", n + 1);
+                    bail!(
+                        "line {}: time {ti} does not increase (previous {prev})",
+                        n + 1
+                    );
                 }
                 if ti - prev > 10.0 * step * (1.0 + 1e-9) {
-                    bail!("line {}: sample interval {:.6} s is coarser than 10 steps ({:.6} s)", n + 1, ti - prev, 10.0 * step);
+                    bail!(
+                        "line {}: sample interval {:.6} s is coarser than 10 steps ({:.6} s)",
+                        n + 1,
+                        ti - prev,
+                        10.0 * step
+                    );
                 }
             }
             t.push(ti);
@@ -134,7 +167,10 @@ impl Excitation {
         let available = ((last / step) * (1.0 + 1e-12)).floor() as usize;
         let n = match steps {
             Some(s) if s > available => {
-                bail!("covers {last} s but the run needs {} s ({s} steps of {step} s)", s as f64 * step)
+                bail!(
+                    "covers {last} s but the run needs {} s ({s} steps of {step} s)",
+                    s as f64 * step
+                )
             }
             Some(s) => s,
             None => available,
@@ -150,18 +186,34 @@ impl Excitation {
             let w = ((tk - t0) / (t1 - t0)).clamp(0.0, 1.0);
             accel.push(a[j] + w * (a[j + 1] - a[j]));
         }
+        // Trapezoidal integrals; the constants of integration make the mean velocity and the
+        // mean displacement over the resampled record zero (a vibrating pole does not drift; an
+        // integral from rest would drift by the unknown initial velocity times t).
         let mut velocity = vec![0.0; n + 1];
-        let mut displacement = vec![0.0; n + 1];
         for k in 1..=n {
             velocity[k] = velocity[k - 1] + 0.5 * step * (accel[k - 1] + accel[k]);
+        }
+        let mean_v = velocity.iter().sum::<f64>() / (n + 1) as f64;
+        velocity.iter_mut().for_each(|v| *v -= mean_v);
+        let mut displacement = vec![0.0; n + 1];
+        for k in 1..=n {
             displacement[k] = displacement[k - 1] + 0.5 * step * (velocity[k - 1] + velocity[k]);
         }
-        Ok(Self::Sampled { step, accel, velocity, displacement })
+        let mean_y = displacement.iter().sum::<f64>() / (n + 1) as f64;
+        displacement.iter_mut().for_each(|y| *y -= mean_y);
+        Ok(Self::Sampled {
+            step,
+            accel,
+            velocity,
+            displacement,
+        })
     }
 }
 
 fn first_content_line(text: &str) -> usize {
-    text.lines().position(|l| !l.trim().is_empty() && !l.trim().starts_with('#')).unwrap_or(0)
+    text.lines()
+        .position(|l| !l.trim().is_empty() && !l.trim().starts_with('#'))
+        .unwrap_or(0)
 }
 
 /// The excitation of a scene, on its step grid, for `steps` steps.
@@ -171,13 +223,21 @@ pub fn of_scene(scene: &crate::scene::Scene, steps: usize) -> Result<Excitation>
     let h = f.integrator.step;
     match f.excitation.kind {
         ExcitationType::Harmonic => Ok(Excitation::harmonic(
-            f.excitation.amplitude.unwrap_or(0.0),
-            f.excitation.frequency.unwrap_or(1.0),
+            f.excitation.amplitude_or_paper(),
+            f.excitation.frequency_or_paper(),
             h,
         )),
         ExcitationType::Csv => {
-            let file = f.excitation.file.as_ref().context("missing `excitation.file`")?;
-            let path = if file.is_absolute() { file.clone() } else { scene.base_dir.join(file) };
+            let file = f
+                .excitation
+                .file
+                .as_ref()
+                .context("missing `excitation.file`")?;
+            let path = if file.is_absolute() {
+                file.clone()
+            } else {
+                scene.base_dir.join(file)
+            };
             Excitation::from_csv(&path, h, Some(steps))
         }
     }

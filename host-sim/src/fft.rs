@@ -16,7 +16,10 @@ pub struct Spectrum {
 pub fn spectrum(x: &[f64], dt: f64) -> Spectrum {
     let n = x.len();
     if n < 2 || dt <= 0.0 {
-        return Spectrum { frequency: Vec::new(), amplitude: Vec::new() };
+        return Spectrum {
+            frequency: Vec::new(),
+            amplitude: Vec::new(),
+        };
     }
     let mean = x.iter().sum::<f64>() / n as f64;
     let window = |i: usize| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos();
@@ -24,18 +27,34 @@ pub fn spectrum(x: &[f64], dt: f64) -> Spectrum {
     let mut buf: Vec<Complex<f64>> = x
         .iter()
         .enumerate()
-        .map(|(i, &v)| Complex::new(if v.is_finite() { (v - mean) * window(i) } else { 0.0 }, 0.0))
+        .map(|(i, &v)| {
+            Complex::new(
+                if v.is_finite() {
+                    (v - mean) * window(i)
+                } else {
+                    0.0
+                },
+                0.0,
+            )
+        })
         .collect();
     FftPlanner::new().plan_fft_forward(n).process(&mut buf);
     let half = n / 2;
     let frequency = (0..=half).map(|k| k as f64 / (n as f64 * dt)).collect();
     let amplitude = (0..=half)
         .map(|k| {
-            let s = if k == 0 || (n % 2 == 0 && k == half) { 1.0 } else { 2.0 };
+            let s = if k == 0 || (n.is_multiple_of(2) && k == half) {
+                1.0
+            } else {
+                2.0
+            };
             s * buf[k].norm() / gain
         })
         .collect();
-    Spectrum { frequency, amplitude }
+    Spectrum {
+        frequency,
+        amplitude,
+    }
 }
 
 impl Spectrum {
@@ -52,9 +71,17 @@ impl Spectrum {
         if k == 0 || k + 1 >= self.amplitude.len() || a <= 0.0 {
             return Some((self.frequency[k], a));
         }
-        let (l, c, r) = (self.amplitude[k - 1].max(1e-300).ln(), a.ln(), self.amplitude[k + 1].max(1e-300).ln());
+        let (l, c, r) = (
+            self.amplitude[k - 1].max(1e-300).ln(),
+            a.ln(),
+            self.amplitude[k + 1].max(1e-300).ln(),
+        );
         let den = l - 2.0 * c + r;
-        let d = if den.abs() > 0.0 { 0.5 * (l - r) / den } else { 0.0 };
+        let d = if den.abs() > 0.0 {
+            0.5 * (l - r) / den
+        } else {
+            0.0
+        };
         Some((self.frequency[k] + d.clamp(-0.5, 0.5) * df, a))
     }
 }

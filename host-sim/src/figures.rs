@@ -20,18 +20,35 @@ fn series(rows: &[Row], label: &str, f: impl Fn(&Row) -> (f64, f64)) -> Series {
 }
 
 /// FFT of `x` over rows with t ≥ `from`, up to `max_hz`.
-pub fn fft_points(rows: &[Row], from: f64, max_hz: f64, x: impl Fn(&Row) -> f64) -> Vec<(f64, f64)> {
+pub fn fft_points(
+    rows: &[Row],
+    from: f64,
+    max_hz: f64,
+    x: impl Fn(&Row) -> f64,
+) -> Vec<(f64, f64)> {
     let tail: Vec<&Row> = rows.iter().filter(|r| r.t >= from).collect();
     if tail.len() < 4 {
         return Vec::new();
     }
     let dt = (tail[tail.len() - 1].t - tail[0].t) / (tail.len() - 1) as f64;
     let s = spectrum(&tail.iter().map(|r| x(r)).collect::<Vec<_>>(), dt);
-    s.frequency.iter().zip(&s.amplitude).filter(|(f, _)| **f <= max_hz).map(|(f, a)| (*f, *a)).collect()
+    s.frequency
+        .iter()
+        .zip(&s.amplitude)
+        .filter(|(f, _)| **f <= max_hz)
+        .map(|(f, a)| (*f, *a))
+        .collect()
 }
 
 /// Writes the requested plots of a run into `dir` as `<stem>_<plot>.png`; returns the paths.
-pub fn run_plots(dir: &Path, stem: &str, title: &str, rows: &[Row], plots: &[Plot], transient: f64) -> Result<Vec<PathBuf>> {
+pub fn run_plots(
+    dir: &Path,
+    stem: &str,
+    title: &str,
+    rows: &[Row],
+    plots: &[Plot],
+    transient: f64,
+) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let has_ball = rows.iter().any(|r| r.ball_angle.is_finite());
     let deg = f64::to_degrees;
@@ -54,11 +71,18 @@ pub fn run_plots(dir: &Path, stem: &str, title: &str, rows: &[Row], plots: &[Plo
                         "angle [deg]",
                         vec![
                             series(rows, "θ (from vertical)", |r| (r.t, deg(r.ball_angle))),
-                            series(rows, "θ − ψ (in housing)", |r| (r.t, deg(r.ball_rel_angle))),
+                            series(rows, "θ − ψ (in housing)", |r| {
+                                (r.t, deg(r.ball_rel_angle))
+                            }),
                         ],
                     ));
                 } else {
-                    p.push(Panel::new("Tip mass", "t [s]", "ψ [deg]", vec![series(rows, "", |r| (r.t, deg(r.tip_angle)))]));
+                    p.push(Panel::new(
+                        "Tip mass",
+                        "t [s]",
+                        "ψ [deg]",
+                        vec![series(rows, "", |r| (r.t, deg(r.tip_angle)))],
+                    ));
                 }
                 ("time", p, (2, 1), (1200, 800))
             }
@@ -68,14 +92,20 @@ pub fn run_plots(dir: &Path, stem: &str, title: &str, rows: &[Row], plots: &[Plo
                     &format!("FFT of the beam tip deflection ({t})"),
                     "f [Hz]",
                     "amplitude [m]",
-                    vec![Series::line("", fft_points(rows, transient, 10.0, |r| r.tip_deflection))],
+                    vec![Series::line(
+                        "",
+                        fft_points(rows, transient, 10.0, |r| r.tip_deflection),
+                    )],
                 )];
                 if has_ball {
                     p.push(Panel::new(
                         &format!("FFT of the ball angle θ ({t})"),
                         "f [Hz]",
                         "amplitude [deg]",
-                        vec![Series::line("", fft_points(rows, transient, 10.0, |r| deg(r.ball_angle)))],
+                        vec![Series::line(
+                            "",
+                            fft_points(rows, transient, 10.0, |r| deg(r.ball_angle)),
+                        )],
                     ));
                 }
                 ("fft", p, (p_len(has_ball), 1), (1200, 800))
@@ -108,7 +138,12 @@ pub fn run_plots(dir: &Path, stem: &str, title: &str, rows: &[Row], plots: &[Plo
                     ));
                     ("phase", p, (2, 2), (1200, 1000))
                 } else {
-                    p.push(Panel::new("Tip mass ψ – ψ̇", "ψ [rad]", "ψ̇ [rad/s]", vec![series(rows, "", |r| (r.tip_angle, r.tip_rate))]));
+                    p.push(Panel::new(
+                        "Tip mass ψ – ψ̇",
+                        "ψ [rad]",
+                        "ψ̇ [rad/s]",
+                        vec![series(rows, "", |r| (r.tip_angle, r.tip_rate))],
+                    ));
                     ("phase", p, (1, 2), (1200, 550))
                 }
             }
@@ -122,7 +157,9 @@ pub fn run_plots(dir: &Path, stem: &str, title: &str, rows: &[Row], plots: &[Plo
                         vec![
                             series(rows, "strain", |r| (r.t, mj * r.energies.beam_strain)),
                             series(rows, "kinetic", |r| (r.t, mj * r.energies.beam_kinetic)),
-                            series(rows, "potential Δ", |r| (r.t, mj * r.energies.beam_potential)),
+                            series(rows, "potential Δ", |r| {
+                                (r.t, mj * r.energies.beam_potential)
+                            }),
                         ],
                     ),
                     Panel::new(
@@ -131,7 +168,9 @@ pub fn run_plots(dir: &Path, stem: &str, title: &str, rows: &[Row], plots: &[Plo
                         "E [mJ]",
                         vec![
                             series(rows, "kinetic", |r| (r.t, mj * r.energies.tip_kinetic)),
-                            series(rows, "potential Δ", |r| (r.t, mj * r.energies.tip_potential)),
+                            series(rows, "potential Δ", |r| {
+                                (r.t, mj * r.energies.tip_potential)
+                            }),
                         ],
                     ),
                 ];
@@ -142,7 +181,9 @@ pub fn run_plots(dir: &Path, stem: &str, title: &str, rows: &[Row], plots: &[Plo
                         "E [mJ]",
                         vec![
                             series(rows, "kinetic", |r| (r.t, mj * r.energies.ball_kinetic)),
-                            series(rows, "potential Δ", |r| (r.t, mj * r.energies.ball_potential)),
+                            series(rows, "potential Δ", |r| {
+                                (r.t, mj * r.energies.ball_potential)
+                            }),
                         ],
                     ));
                     p.push(Panel::new(

@@ -1,7 +1,7 @@
 //! Host tools for the absorber: full solver, scenes, sweeps, plots, reports.
 pub use absorber_core;
-pub mod sim;
 pub mod full;
+pub mod sim;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
 pub mod cli;
 pub mod core_sim;

@@ -33,11 +33,19 @@ pub struct Series {
 impl Series {
     /// A line.
     pub fn line(label: &str, points: Vec<(f64, f64)>) -> Self {
-        Self { label: label.into(), points, markers: false }
+        Self {
+            label: label.into(),
+            points,
+            markers: false,
+        }
     }
     /// Line with markers.
     pub fn marked(label: &str, points: Vec<(f64, f64)>) -> Self {
-        Self { label: label.into(), points, markers: true }
+        Self {
+            label: label.into(),
+            points,
+            markers: true,
+        }
     }
 }
 
@@ -57,7 +65,12 @@ pub struct Panel {
 impl Panel {
     /// A chart.
     pub fn new(title: &str, x: &str, y: &str, series: Vec<Series>) -> Self {
-        Self { title: title.into(), x: x.into(), y: y.into(), series }
+        Self {
+            title: title.into(),
+            x: x.into(),
+            y: y.into(),
+            series,
+        }
     }
 }
 
@@ -79,21 +92,44 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     if lo > hi {
         return (-1.0, 1.0);
     }
-    let pad = if hi > lo { 0.05 * (hi - lo) } else { 0.5 * lo.abs().max(1e-12) };
+    let pad = if hi > lo {
+        0.05 * (hi - lo)
+    } else {
+        0.5 * lo.abs().max(1e-12)
+    };
     (lo - pad, hi + pad)
 }
 
 /// Draws `panels` on a grid of `rows × cols` into a PNG of `width × height` pixels.
-pub fn render(path: &Path, title: &str, panels: &[Panel], rows: usize, cols: usize, size: (u32, u32)) -> Result<()> {
+pub fn render(
+    path: &Path,
+    title: &str,
+    panels: &[Panel],
+    rows: usize,
+    cols: usize,
+    size: (u32, u32),
+) -> Result<()> {
     fonts();
     let err = |e: &dyn std::fmt::Display| anyhow!("plot `{}`: {e}", path.display());
     let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
-    let root = root.titled(title, (FONT, 22).into_font().style(FontStyle::Bold)).map_err(|e| err(&e))?;
+    let root = root
+        .titled(title, (FONT, 22).into_font().style(FontStyle::Bold))
+        .map_err(|e| err(&e))?;
     let areas = root.split_evenly((rows, cols));
     for (panel, area) in panels.iter().zip(areas.iter()) {
-        let (x0, x1) = range(panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
-        let (y0, y1) = range(panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
+        let (x0, x1) = range(
+            panel
+                .series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.0)),
+        );
+        let (y0, y1) = range(
+            panel
+                .series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.1)),
+        );
         let mut chart = ChartBuilder::on(area)
             .caption(&panel.title, (FONT, 16))
             .margin(8)
@@ -114,15 +150,25 @@ pub fn render(path: &Path, title: &str, panels: &[Panel], rows: usize, cols: usi
         let mut legend = false;
         for (i, s) in panel.series.iter().enumerate() {
             let color = COLORS[i % COLORS.len()];
-            let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
-            let anno = chart.draw_series(LineSeries::new(pts.clone(), color.stroke_width(1))).map_err(|e| err(&e))?;
+            let pts: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .collect();
+            let anno = chart
+                .draw_series(LineSeries::new(pts.clone(), color.stroke_width(1)))
+                .map_err(|e| err(&e))?;
             if !s.label.is_empty() {
                 legend = true;
-                anno.label(s.label.as_str())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+                anno.label(s.label.as_str()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
             }
             if s.markers {
-                chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))).map_err(|e| err(&e))?;
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                    .map_err(|e| err(&e))?;
             }
         }
         if legend {

@@ -12,10 +12,27 @@ pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simula
     let f = &scene.file;
     let params = scene.params()?;
     match f.solver {
-        Solver::Core => crate::core_sim::build(f.kind, f.elements, f.precision, &params, base_accel0)
-            .map_err(|e| crate::scene::map_core_error(e, scene)),
-        // Wire the full solver here once `host_sim::full` provides a constructor.
-        Solver::Full => bail!("full solver not built yet (use --solver core)"),
+        Solver::Core => {
+            crate::core_sim::build(f.kind, f.elements, f.precision, &params, base_accel0)
+                .map_err(|e| crate::scene::map_core_error(e, scene))
+        }
+        Solver::Full => {
+            use crate::full::{FullSolver, SceneKind};
+            use crate::scene::{Kind, Precision};
+            if f.precision != Precision::F64 {
+                bail!("the full solver is f64 only (use --precision f64 or --solver core)");
+            }
+            let kind = match f.kind {
+                Kind::Beam => SceneKind::BeamOnly,
+                Kind::Tip => SceneKind::TipMass,
+                Kind::Locked => SceneKind::LockedBall,
+                Kind::Free => SceneKind::FreeBall,
+                Kind::FreeNostops => SceneKind::FreeBallNoStops,
+            };
+            let sim = FullSolver::at_rest(params, kind, f.elements, base_accel0)
+                .map_err(|e| crate::scene::map_core_error(e, scene))?;
+            Ok(Box::new(sim))
+        }
     }
 }
 
@@ -91,7 +108,11 @@ impl Row {
             e.ball_kinetic,
             e.ball_potential,
         ];
-        let mut s: String = v.iter().map(|x| format!("{x:.9e}")).collect::<Vec<_>>().join(",");
+        let mut s: String = v
+            .iter()
+            .map(|x| format!("{x:.9e}"))
+            .collect::<Vec<_>>()
+            .join(",");
         s.push_str(&format!(",{},{}", self.iterations, u8::from(self.impact)));
         for x in [
             self.base_accel,
@@ -149,9 +170,18 @@ pub fn simulate(
     for k in 1..=steps {
         let b = exc.at(k);
         let report = sim.step(b.accel).map_err(|e| {
-            anyhow!("step {k} (t = {:.4} s) failed: {}", k as f64 * scene.file.integrator.step, scene_error(e, scene))
+            anyhow!(
+                "step {k} (t = {:.4} s) failed: {}",
+                k as f64 * scene.file.integrator.step,
+                scene_error(e, scene)
+            )
         })?;
-        sink(&row(sim.as_ref(), k, report.iterations, report.impact.is_some()));
+        sink(&row(
+            sim.as_ref(),
+            k,
+            report.iterations,
+            report.impact.is_some(),
+        ));
         if k % 500 == 0 {
             progress(k);
         }
@@ -180,7 +210,8 @@ pub fn run_rows(scene: &Scene, progress: impl FnMut(usize)) -> Result<Vec<Row>> 
 
 /// Writes rows (every `every`-th) as CSV with the documented header.
 pub fn write_csv(path: &std::path::Path, rows: &[Row], every: usize) -> Result<()> {
-    let file = std::fs::File::create(path).map_err(|e| anyhow!("cannot create `{}`: {e}", path.display()))?;
+    let file = std::fs::File::create(path)
+        .map_err(|e| anyhow!("cannot create `{}`: {e}", path.display()))?;
     let mut w = std::io::BufWriter::new(file);
     writeln!(w, "{CSV_HEADER}")?;
     for r in rows.iter().step_by(every.max(1)) {

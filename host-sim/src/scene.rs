@@ -8,7 +8,7 @@
 //! ```toml
 //! name = "paper"
 //! kind = "free"          # beam | tip | locked | free | free-nostops
-//! elements = 3           # 1, 2, 3, 4, 6, 8 or 16
+//! elements = 3           # core: 1, 2, 3, 4, 6, 8 or 16; full: any
 //! precision = "f64"      # f32 | f64
 //! solver = "core"        # core | full
 //! duration = 60.0        # s
@@ -204,9 +204,10 @@ pub enum ExcitationType {
     Csv,
 }
 
-/// `[excitation]`.
+/// `[excitation]`. A harmonic excitation without `amplitude` or `frequency` takes the paper's
+/// 0.5 mm and 4.13 Hz.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields, default = "ExcitationSection::unset")]
 pub struct ExcitationSection {
     /// `harmonic` or `csv`.
     #[serde(rename = "type")]
@@ -287,13 +288,23 @@ pub struct SceneFile {
 impl Default for BeamSection {
     fn default() -> Self {
         let p = Params::<f64>::default().beam;
-        Self { length: p.length, mass: p.mass, area: p.area, modulus: p.modulus, inertia: p.inertia }
+        Self {
+            length: p.length,
+            mass: p.mass,
+            area: p.area,
+            modulus: p.modulus,
+            inertia: p.inertia,
+        }
     }
 }
 impl Default for TipSection {
     fn default() -> Self {
         let p = Params::<f64>::default().tip;
-        Self { mass: p.mass, inertia: p.inertia, offset: p.offset }
+        Self {
+            mass: p.mass,
+            inertia: p.inertia,
+            offset: p.offset,
+        }
     }
 }
 impl Default for BallSection {
@@ -318,17 +329,53 @@ impl Default for BallSection {
 impl Default for IntegratorSection {
     fn default() -> Self {
         let p = Params::<f64>::default().integrator;
-        Self { gamma: p.gamma, beta: p.beta, step: p.step, tolerance: p.tolerance, max_iterations: p.max_iterations }
+        Self {
+            gamma: p.gamma,
+            beta: p.beta,
+            step: p.step,
+            tolerance: p.tolerance,
+            max_iterations: p.max_iterations,
+        }
     }
 }
 impl Default for ExcitationSection {
     fn default() -> Self {
-        Self { kind: ExcitationType::Harmonic, amplitude: Some(0.5e-3), frequency: Some(4.13), file: None }
+        Self {
+            kind: ExcitationType::Harmonic,
+            amplitude: Some(0.5e-3),
+            frequency: Some(4.13),
+            file: None,
+        }
     }
 }
+impl ExcitationSection {
+    /// Harmonic, nothing given (what a `[excitation]` table starts from).
+    pub fn unset() -> Self {
+        Self {
+            kind: ExcitationType::Harmonic,
+            amplitude: None,
+            frequency: None,
+            file: None,
+        }
+    }
+    /// Amplitude \[m\] (paper 0.5 mm when not given).
+    pub fn amplitude_or_paper(&self) -> f64 {
+        self.amplitude.unwrap_or(0.5e-3)
+    }
+    /// Frequency \[Hz\] (paper 4.13 Hz when not given).
+    pub fn frequency_or_paper(&self) -> f64 {
+        self.frequency.unwrap_or(4.13)
+    }
+}
+
 impl Default for OutputsSection {
     fn default() -> Self {
-        Self { directory: PathBuf::from("out"), plots: vec![Plot::Time, Plot::Fft, Plot::Phase, Plot::Energy], transient: 20.0, every: 1 }
+        Self {
+            directory: PathBuf::from("out"),
+            plots: vec![Plot::Time, Plot::Fft, Plot::Phase, Plot::Energy],
+            transient: 20.0,
+            every: 1,
+        }
     }
 }
 impl Default for SceneFile {
@@ -371,7 +418,10 @@ pub const BUILT_IN: [&str; 1] = ["paper"];
 impl Scene {
     /// The paper's scene (Table 1, free ball, 3 elements, f64, 0.5 mm at 4.13 Hz, 60 s).
     pub fn paper() -> Self {
-        Self { file: SceneFile::default(), base_dir: PathBuf::from(".") }
+        Self {
+            file: SceneFile::default(),
+            base_dir: PathBuf::from("."),
+        }
     }
 
     /// `paper` (built in) or a path to a TOML file.
@@ -380,17 +430,33 @@ impl Scene {
             return Ok(Self::paper());
         }
         let path = Path::new(spec);
-        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read scene `{spec}`"))?;
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("cannot read scene `{spec}`"))?;
         let file = parse(&text).with_context(|| format!("scene `{spec}`"))?;
-        let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
-        let scene = Self { file, base_dir: if base_dir.as_os_str().is_empty() { PathBuf::from(".") } else { base_dir } };
-        scene.validate().with_context(|| format!("scene `{spec}`"))?;
+        let base_dir = path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        let scene = Self {
+            file,
+            base_dir: if base_dir.as_os_str().is_empty() {
+                PathBuf::from(".")
+            } else {
+                base_dir
+            },
+        };
+        scene
+            .validate()
+            .with_context(|| format!("scene `{spec}`"))?;
         Ok(scene)
     }
 
     /// Parses scene text (relative paths refer to the working directory) and validates it.
     pub fn from_toml(text: &str) -> Result<Self> {
-        let scene = Self { file: parse(text)?, base_dir: PathBuf::from(".") };
+        let scene = Self {
+            file: parse(text)?,
+            base_dir: PathBuf::from("."),
+        };
         scene.validate()?;
         Ok(scene)
     }
@@ -399,19 +465,28 @@ impl Scene {
     /// excitation and the outputs. Errors name the scene-file key.
     pub fn validate(&self) -> Result<()> {
         let f = &self.file;
-        if !ELEMENTS.contains(&f.elements) {
-            bail!("invalid value for `elements`: {} (supported: 1, 2, 3, 4, 6, 8, 16)", f.elements);
+        if f.solver == Solver::Core && !ELEMENTS.contains(&f.elements) {
+            bail!(
+                "invalid value for `elements`: {} (the core solver supports 1, 2, 3, 4, 6, 8, 16)",
+                f.elements
+            );
+        }
+        if f.elements == 0 || f.elements > 1000 {
+            bail!(
+                "invalid value for `elements`: {} (must lie in 1 ..= 1000)",
+                f.elements
+            );
         }
         finite_positive(f.duration, "duration")?;
         self.params()?;
         let e = &f.excitation;
         match e.kind {
             ExcitationType::Harmonic => {
-                let a = e.amplitude.ok_or_else(|| anyhow!("missing `excitation.amplitude` for a harmonic excitation"))?;
+                let a = e.amplitude_or_paper();
                 if !a.is_finite() || a < 0.0 {
                     bail!("invalid value for `excitation.amplitude`: {a} (must be finite and not negative)");
                 }
-                let fr = e.frequency.ok_or_else(|| anyhow!("missing `excitation.frequency` for a harmonic excitation"))?;
+                let fr = e.frequency_or_paper();
                 finite_positive(fr, "excitation.frequency")?;
                 if e.file.is_some() {
                     bail!("`excitation.file` is only for type = \"csv\"");
@@ -428,7 +503,10 @@ impl Scene {
         }
         let o = &f.outputs;
         if !o.transient.is_finite() || o.transient < 0.0 {
-            bail!("invalid value for `outputs.transient`: {} (must be finite and not negative)", o.transient);
+            bail!(
+                "invalid value for `outputs.transient`: {} (must be finite and not negative)",
+                o.transient
+            );
         }
         if o.every == 0 {
             bail!("invalid value for `outputs.every`: 0 (must be at least 1)");
@@ -463,7 +541,11 @@ impl Scene {
                 modulus: f.beam.modulus,
                 inertia: f.beam.inertia,
             },
-            tip: TipParams { mass: f.tip.mass, inertia: f.tip.inertia, offset: f.tip.offset },
+            tip: TipParams {
+                mass: f.tip.mass,
+                inertia: f.tip.inertia,
+                offset: f.tip.offset,
+            },
             ball: BallParams {
                 mass: b.mass,
                 inertia: b.inertia,
@@ -489,7 +571,8 @@ impl Scene {
             gravity: f.gravity,
         };
         let has_tip = f.kind != Kind::Beam;
-        p.validate(has_tip, f.kind.has_ball()).map_err(|e| map_core_error(e, self))?;
+        p.validate(has_tip, f.kind.has_ball())
+            .map_err(|e| map_core_error(e, self))?;
         Ok(p)
     }
 
@@ -537,7 +620,10 @@ fn scene_key(field: &str, s: &Scene) -> (String, String) {
         "integrator.step" => (field.into(), v(f.integrator.step)),
         "integrator.tolerance" => (field.into(), v(f.integrator.tolerance)),
         "integrator.max_iterations" => (field.into(), f.integrator.max_iterations.to_string()),
-        "damping.stiffness_proportional" => (field.into(), format!("{:?}", f.damping.stiffness_proportional)),
+        "damping.stiffness_proportional" => (
+            field.into(),
+            format!("{:?}", f.damping.stiffness_proportional),
+        ),
         "gravity" => (field.into(), v(f.gravity)),
         other => (other.into(), "?".into()),
     }
@@ -548,6 +634,11 @@ pub fn map_core_error(e: absorber_core::Error, scene: &Scene) -> anyhow::Error {
     match e {
         absorber_core::Error::InvalidParameter { field, reason } => {
             let (key, value) = scene_key(field, scene);
+            let reason = if key.ends_with("_deg") {
+                reason.replace("pi", "180 deg")
+            } else {
+                reason.to_string()
+            };
             anyhow!("invalid value for `{key}`: {value} ({reason})")
         }
         other => anyhow!(other),
@@ -564,10 +655,12 @@ pub fn parse(text: &str) -> Result<SceneFile> {
 }
 
 fn one_line(e: &toml::de::Error, text: &str, path: &str) -> anyhow::Error {
-    let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let line = e
+        .span()
+        .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
     let at = line.map(|l| format!(" (line {l})")).unwrap_or_default();
     let msg = e.message().trim().replace('\n', " ");
-    if path.is_empty() || path == "." || msg.contains("unknown field") && !path.contains('.') && path == "?" {
+    if path.is_empty() || path == "." {
         anyhow!("{msg}{at}")
     } else {
         anyhow!("`{path}`: {msg}{at}")

@@ -9,8 +9,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 /// The paper's excitation frequencies \[Hz\] (§5.1).
-pub const PAPER_FREQUENCIES: [f64; 14] =
-    [3.50, 3.70, 3.80, 3.85, 3.90, 3.95, 4.00, 4.05, 4.10, 4.13, 4.25, 4.40, 4.50, 4.70];
+pub const PAPER_FREQUENCIES: [f64; 14] = [
+    3.50, 3.70, 3.80, 3.85, 3.90, 3.95, 4.00, 4.05, 4.10, 4.13, 4.25, 4.40, 4.50, 4.70,
+];
 
 /// Steady-state response at one frequency.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -49,7 +50,7 @@ pub fn sweep(
             bail!("invalid sweep frequency {f} (must be finite and positive)");
         }
     }
-    let amplitude = scene.file.excitation.amplitude.unwrap_or(0.5e-3);
+    let amplitude = scene.file.excitation.amplitude_or_paper();
     let steps = scene.steps();
     let h = scene.file.integrator.step;
     let from = (scene.file.duration - last).max(0.0);

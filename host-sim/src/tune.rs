@@ -31,8 +31,14 @@ pub struct Tuned {
 pub fn coupled_frequencies(scene: &Scene, r: f64) -> Result<(f64, f64)> {
     let mut p = scene.params()?;
     p.ball.track_radius = r;
-    let sim = crate::core_sim::build(Kind::FreeNostops, scene.file.elements, Precision::F64, &p, 0.0)
-        .map_err(|e| crate::scene::map_core_error(e, scene))?;
+    let sim = crate::core_sim::build(
+        Kind::FreeNostops,
+        scene.file.elements,
+        Precision::F64,
+        &p,
+        0.0,
+    )
+    .map_err(|e| crate::scene::map_core_error(e, scene))?;
     let f = sim.natural_frequencies().map_err(|e| anyhow!("{e}"))?;
     match f.as_slice() {
         [a, b, ..] => Ok((*a, *b)),
@@ -52,12 +58,19 @@ pub fn tune(scene: &Scene, ratio: f64) -> Result<Tuned> {
     let b = p.ball;
     let locked = crate::core_sim::build(Kind::Locked, scene.file.elements, Precision::F64, &p, 0.0)
         .map_err(|e| crate::scene::map_core_error(e, scene))?;
-    let f_beam = *locked.natural_frequencies().map_err(|e| anyhow!("{e}"))?.first().unwrap_or(&f64::NAN);
+    let f_beam = *locked
+        .natural_frequencies()
+        .map_err(|e| anyhow!("{e}"))?
+        .first()
+        .unwrap_or(&f64::NAN);
     // Fixed-housing ball: f = √(g m / ((m + J/r²) ρ)) / 2π → ρ(f).
     let m_eff = b.mass + b.inertia / (b.radius * b.radius);
     let rho_of = |f: f64| p.gravity * b.mass / (m_eff * (std::f64::consts::TAU * f).powi(2));
     // The ball mode is the lowest and the beam mode the second between these limits.
-    let (mut lo, mut hi) = (b.radius + rho_of(0.8 * f_beam), b.radius + rho_of(0.2 * f_beam));
+    let (mut lo, mut hi) = (
+        b.radius + rho_of(0.8 * f_beam),
+        b.radius + rho_of(0.2 * f_beam),
+    );
     let g = |r: f64| -> Result<f64> {
         let (ball, beam) = coupled_frequencies(scene, r)?;
         Ok(ball / beam - ratio)
