@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Regenerates the measured sections of docs/embedded.md: instructions per `step` (exact, QEMU
+# TCG plugin), a cycle/µs estimate, flash and RAM of the model, the stack high-water mark of
+# `step`, and the panic/heap check of the step path, for the free-ball, beam-only and
+# locked-ball scenes.
+#
+# Usage: scripts/embedded-report.sh          (needs what .ci/embedded.sh installs, plus gcc and python3)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+target=thumbv7em-none-eabihf
+export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$root/target}
+tdir=$CARGO_TARGET_DIR
+work=$tdir/embedded-report
+mkdir -p "$work"
+
+for tool in qemu-system-arm arm-none-eabi-size arm-none-eabi-nm arm-none-eabi-objdump gcc python3; do
+    command -v "$tool" >/dev/null || { echo "embedded-report: $tool missing (run .ci/embedded.sh first)"; exit 1; }
+done
+
+# Same flags as .ci/embedded.sh, so the measured binaries are the tested ones.
+export CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="--remap-path-prefix=${CARGO_HOME:-$HOME/.cargo}=/cargo --remap-path-prefix=$root=/absorber"
+cargo build -q --release -p absorber-firmware
+for profile in fw fw-size; do
+    cargo build -q -p absorber-firmware --target "$target" --profile "$profile" --config firmware/fw-profile.toml
+done
+gcc -O2 -Wall -Wextra -shared -fPIC -fvisibility=hidden -o "$work/step-counter.so" scripts/qemu-step-counter.c
+
+qemu() {
+    timeout 600 qemu-system-arm -M mps2-an386 -nographic -monitor none \
+        -semihosting-config enable=on,target=native "$@"
+}
+
+for profile in fw fw-size; do
+    for scene in free beam locked empty; do
+        elf=$tdir/$target/$profile/fw-$scene
+        stem=$work/$profile-$scene
+        "$tdir/release/fw-$scene" >"$stem.host"
+        hash=$(sed -n 's/^state_hash=//p' "$stem.host")
+        arm-none-eabi-nm -C "$elf" >"$stem.nm"
+        arm-none-eabi-size -A "$elf" >"$stem.size"
+        [ "$scene" = empty ] && continue
+        arm-none-eabi-objdump -d --no-show-raw-insn "$elf" >"$stem.dis"
+        # Entry of the counted function and the return address of each call site.
+        entry=$(awk '/ as absorber_firmware::Sim>::step$/ {print "0x" $1}' "$stem.nm" | sed 's/^0x0*/0x/')
+        [ -n "$entry" ] || { echo "embedded-report: no step symbol in $elf"; exit 1; }
+        rets=""
+        for site in $(awk -v e="${entry#0x}" '$2 == "bl" && $3 == e {sub(":", "", $1); print $1}' "$stem.dis"); do
+            rets+=$(printf ',ret=0x%x' $((0x$site + 4)))   # bl is a 32-bit instruction
+        done
+        [ -n "$rets" ] || { echo "embedded-report: no call of step in $elf"; exit 1; }
+        echo "$entry" >"$stem.entry"
+        qemu -kernel "$elf" -append "expect=$hash" \
+            -plugin "$work/step-counter.so,entry=$entry$rets,out=$stem.counts,prof=$stem.prof" >"$stem.qemu"
+        qemu -kernel "$elf" -append "expect=$hash stack" >"$stem.stack"
+    done
+done
+
+python3 scripts/embedded-report.py "$work" docs/embedded.md
+echo "embedded-report: docs/embedded.md updated"
