@@ -112,7 +112,7 @@ impl Band {
                     p = i;
                 }
             }
-            if !(best > 0.0) || !best.is_finite() {
+            if !best.is_finite() || best <= 0.0 {
                 return None;
             }
             if let Some(slot) = pivots.get_mut(k) {
@@ -144,6 +144,7 @@ impl Band {
 
 impl BandLu {
     /// Solves `A x = b` in place; false if the result is not finite.
+    #[allow(clippy::needless_range_loop)] // banded index ranges read clearer as ranges
     pub fn solve(&self, b: &mut [f64]) -> bool {
         let a = &self.a;
         let n = a.n;

@@ -633,12 +633,8 @@ impl FullSolver {
                         let kp = self.local_kin(mode, &q, &v, &kin.w, theta_ref)?;
                         cols[side] = self.local_residual(&kp, mode, &a, g_eff)?;
                     }
-                    for row in 0..nl {
-                        jb.add(
-                            loc0 + row,
-                            loc0 + k,
-                            (cols[0][row] - cols[1][row]) / (2.0 * eps),
-                        );
+                    for (row, (p, m)) in cols[0].iter().zip(cols[1].iter()).enumerate().take(nl) {
+                        jb.add(loc0 + row, loc0 + k, (p - m) / (2.0 * eps));
                     }
                 }
             }
@@ -746,16 +742,15 @@ impl FullSolver {
             contact,
             theta_ref: prev.theta_ref,
         };
-        for i in 0..4 * self.n {
-            s.q[4 + i] = qi[i];
-            s.v[4 + i] = vi[i];
-            s.a[4 + i] = ai[i];
-        }
-        for j in 4..4 + self.n_body {
+        let nb = 4 * self.n;
+        s.q[4..4 + nb].copy_from_slice(&qi[..nb]);
+        s.v[4..4 + nb].copy_from_slice(&vi[..nb]);
+        s.a[4..4 + nb].copy_from_slice(&ai[..nb]);
+        for (j, acc) in wdd.iter().enumerate().skip(4).take(self.n_body) {
             let z = self.zloc(j);
             s.q[z] = kin.w[j];
             s.v[z] = kin.wd[j];
-            s.a[z] = wdd[j];
+            s.a[z] = *acc;
         }
         if self.scene.has_ball() {
             s.theta_ref = self.bodies.orbit(&kin.w, &kin.wd, prev.theta_ref).0;
@@ -958,7 +953,7 @@ impl FullSolver {
             let dp = (6.0 * t2 - 6.0 * tau) * (a0 - a1)
                 + (3.0 * t2 - 4.0 * tau + 1.0) * d0
                 + (3.0 * t2 - 2.0 * tau) * d1;
-            if !(dp.abs() > 0.0) {
+            if dp == 0.0 || dp.is_nan() {
                 break;
             }
             let next = tau - p / dp;
@@ -1176,7 +1171,7 @@ impl FullSolver {
                 return Err(Error::Singular);
             }
             let wgt: f64 = grad.iter().zip(y.iter()).map(|(a, b)| a * b).sum();
-            if !(wgt > 0.0) {
+            if !wgt.is_finite() || wgt <= 0.0 {
                 return Err(Error::Singular);
             }
             let lambda = -(1.0 + e) * speed / wgt;
