@@ -27,8 +27,8 @@ pub fn solve<T: Real, const D: usize>(
             return None;
         }
         if p != k {
-            a.swap_rows(p, k);
-            b.swap_rows(p, k);
+            swap_rows(&mut a, p, k);
+            let _ = b.as_mut_slice().get_disjoint_mut([p, k]).map(|[x, y]| core::mem::swap(x, y));
         }
         let inv = T::one() / a[(k, k)];
         for i in (k + 1)..D {
@@ -54,6 +54,16 @@ pub fn solve<T: Real, const D: usize>(
         Some(b)
     } else {
         None
+    }
+}
+
+/// Swaps rows `p` and `k` of a column-major matrix without an index assertion (nalgebra's
+/// `swap_rows` asserts, and at opt-level "s" that panic path survives into firmware).
+fn swap_rows<T: Real, const D: usize>(a: &mut SMatrix<T, D, D>, p: usize, k: usize) {
+    for column in a.as_mut_slice().chunks_exact_mut(D) {
+        if let Ok([x, y]) = column.get_disjoint_mut([p, k]) {
+            core::mem::swap(x, y);
+        }
     }
 }
 

@@ -241,13 +241,31 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         ch: &Chain<T>,
         contact: Contact,
     ) -> (SVector<T, D>, SMatrix<T, D, D>, T) {
+        self.assemble_with(q, v, a, g_eff, ch, contact, false)
+    }
+
+    /// [`Model::assemble`], optionally with a free ball pinned plumb (static solve).
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_with(
+        &self,
+        q: &SVector<T, D>,
+        v: &SVector<T, D>,
+        a: &SVector<T, D>,
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+        plumb: bool,
+    ) -> (SVector<T, D>, SMatrix<T, D, D>, T) {
         let mut r = SVector::<T, D>::zeros();
         let mut jac = SMatrix::<T, D, D>::zeros();
         self.beam.assemble(N, q, v, a, g_eff, ch, &mut r, &mut jac);
         let mut contact_force = T::zero();
         if S::HAS_TIP {
             let x = Self::local(q, v, a);
-            let mode = Self::ball_mode(contact, self.params.ball.stop_angle);
+            let mode = match Self::ball_mode(contact, self.params.ball.stop_angle) {
+                BallMode::Free if plumb => BallMode::Plumb,
+                m => m,
+            };
             let (rows, lambda) =
                 tip::residual(&self.inertia, &x, ch, g_eff, mode, S::EXTRA_DOFS == 1);
             contact_force = lambda;
@@ -274,11 +292,28 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         q0: &SVector<T, D>,
         v0: &SVector<T, D>,
         a0: &SVector<T, D>,
+        x: SVector<T, D>,
+        ch: &Chain<T>,
+        c_pos: T,
+        g_eff: T,
+        contact: Contact,
+    ) -> Result<Solved<T, D>, Error> {
+        self.newton_with(q0, v0, a0, x, ch, c_pos, g_eff, contact, false)
+    }
+
+    /// [`Model::newton`], optionally with a free ball pinned plumb (static solve).
+    #[allow(clippy::too_many_arguments)]
+    fn newton_with(
+        &self,
+        q0: &SVector<T, D>,
+        v0: &SVector<T, D>,
+        a0: &SVector<T, D>,
         mut x: SVector<T, D>,
         ch: &Chain<T>,
         c_pos: T,
         g_eff: T,
         contact: Contact,
+        plumb: bool,
     ) -> Result<Solved<T, D>, Error> {
         let max = self.params.integrator.max_iterations;
         let tol = self.params.integrator.tolerance;
@@ -287,7 +322,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             let q = q0 + x * ch.c_q;
             let v = v0 + x * ch.c_v;
             let a = a0 + x * ch.c_m;
-            let (r, jac, _) = self.assemble(&q, &v, &a, g_eff, ch, contact);
+            let (r, jac, _) = self.assemble_with(&q, &v, &a, g_eff, ch, contact, plumb);
             if !r.iter().all(|z| z.is_finite()) || !jac.iter().all(|z| z.is_finite()) {
                 return Err(Error::NonFiniteState);
             }
@@ -325,33 +360,37 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         })
     }
 
-    /// Static equilibrium under gravity (zero base acceleration) by load stepping in 4 steps.
-    /// Sets the state to it (at rest) and remembers it as the reference of the potentials.
+    /// Static equilibrium under gravity (zero base acceleration), a free ball hanging plumb
+    /// below the beam end, by load stepping: gravity in steps of at most a quarter, halved after
+    /// a failed solve (down to 1/1024), doubled again after a success. Returns the Newton
+    /// iterations used. Sets the state to the equilibrium, at rest, and remembers it as the
+    /// reference of the potentials. On error the model is unchanged.
     pub fn solve_static(&mut self) -> Result<u32, Error> {
-        const LOAD_STEPS: usize = 4;
         let z = SVector::<T, D>::zeros();
-        let ch = Chain {
-            c_q: T::one(),
-            c_v: T::zero(),
-            c_m: T::zero(),
-        };
-        let mut q = z;
+        let ch = Chain { c_q: T::one(), c_v: T::zero(), c_m: T::zero() };
+        let (quarter, smallest) = (lit::<T>(0.25), lit::<T>(1.0 / 1024.0));
+        let (mut q, mut done, mut step) = (z, T::zero(), quarter);
         let mut iterations = 0;
-        for k in 1..=LOAD_STEPS {
-            let g = self.params.gravity * lit::<T>(k as f64) / lit::<T>(LOAD_STEPS as f64);
-            let s = self.newton(&z, &z, &z, q, &ch, T::one(), g, Contact::Off)?;
-            q = s.x;
-            iterations += s.iterations;
+        while done < T::one() {
+            let target = (done + step).min(T::one());
+            let g = self.params.gravity * target;
+            match self.newton_with(&z, &z, &z, q, &ch, T::one(), g, Contact::Off, true) {
+                Ok(s) => {
+                    q = s.x;
+                    iterations += s.iterations;
+                    done = target;
+                    step = (step + step).min(quarter);
+                }
+                Err(e) => {
+                    step *= lit::<T>(0.5);
+                    if step < smallest {
+                        return Err(e);
+                    }
+                }
+            }
         }
         self.equilibrium = q;
-        self.state = State {
-            q,
-            v: z,
-            a: z,
-            time: T::zero(),
-            base_accel: T::zero(),
-            contact: Contact::Off,
-        };
+        self.state = State { q, v: z, a: z, time: T::zero(), base_accel: T::zero(), contact: Contact::Off };
         Ok(iterations)
     }
 
@@ -371,6 +410,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             contact: Contact::Off,
         };
         if S::EXTRA_DOFS == 1 {
+            if S::STOPS && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
+                return Err(Error::InvalidParameter {
+                    field: "ball.stop_angle",
+                    reason: "the beam end tilts beyond the stop at static equilibrium (a start with the ball resting on a stop is not supported)",
+                });
+            }
             // θ(0) = θ_eq + initial angle, i.e. φ decreases by ρ/r_b times the angle.
             let k = self.inertia.orbit_per_spin;
             if let Some(spin) = s.q.get_mut(Self::SPIN) {

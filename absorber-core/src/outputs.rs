@@ -48,6 +48,24 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         self.state.time
     }
 
+    /// Vertical momentum relative to the base, `p_y = t_yᵀ M(q) q̇` with `t_y` the rigid vertical
+    /// translation of all bodies \[kg·m/s\]. In the frame moving with the base the only energy
+    /// source is the inertial force −m ÿ_b, whose power is `−ÿ_b p_y`: integrating it gives the
+    /// work the base has done, the bound every run's energy must respect.
+    pub fn vertical_momentum(&self) -> T {
+        let m = self.mass_matrix(&self.state, crate::model::Contact::Off);
+        let mut p = T::zero();
+        for node in 0..N {
+            if let Some(row) = m.fixed_rows::<1>(4 * node + 1).iter().zip(self.state.v.iter()).try_fold(
+                T::zero(),
+                |acc, (mij, vj)| Some(acc + *mij * *vj),
+            ) {
+                p += row;
+            }
+        }
+        p
+    }
+
     /// Static tip deflection of the equilibrium the run started from \[m\].
     pub fn static_tip_deflection(&self) -> T {
         self.equilibrium

@@ -47,6 +47,10 @@ pub enum BallMode<T> {
     Held(T),
     /// Ball free: its spin φ is an unknown.
     Free,
+    /// Static solve of a free ball: φ is an unknown pinned by row 4 to the plumb position
+    /// θ = 0 (an equilibrium for any gravity, the only stable one for g > 0; with g = 0 the
+    /// ball's own equation would be singular).
+    Plumb,
 }
 
 /// Constant inertia data of the tip body and ball, precomputed from [`Params`].
@@ -248,7 +252,7 @@ pub fn residual<T: Real>(
     let theta = match mode {
         BallMode::Absent => None,
         BallMode::Held(lock) => Some((ps.psi.add_re(lock), ps.rate, ps.accel)),
-        BallMode::Free => {
+        BallMode::Free | BallMode::Plumb => {
             // θ = (R_tr ψ − r_b φ)/ρ, and likewise for its rates (linear in ψ and φ).
             let (kt, ks) = (inertia.orbit_per_tilt, inertia.orbit_per_spin);
             let orbit = |p: D5<T>, f: D5<T>| p.scale(kt) - f.scale(ks);
@@ -273,6 +277,10 @@ pub fn residual<T: Real>(
             BallMode::Free => {
                 e_psi = e_psi + e_theta.scale(inertia.orbit_per_tilt);
                 row4 = e_theta.scale(-inertia.orbit_per_spin);
+            }
+            BallMode::Plumb => {
+                e_psi = e_psi + e_theta.scale(inertia.orbit_per_tilt);
+                row4 = th;
             }
             _ => {
                 e_psi = e_psi + e_theta;
