@@ -43,6 +43,7 @@ pub mod error;
 pub mod linalg;
 pub mod model;
 pub mod modes;
+pub mod monitor;
 mod outputs;
 pub mod params;
 pub mod scalar;

@@ -1,0 +1,308 @@
+//! On-device monitoring: root stress, streaming rainflow fatigue damage, impact log and
+//! absorber effectiveness — no heap, memory fixed at compile time, bounded work per sample.
+//!
+//! Feed the monitor after every step of the model; read its figures whenever you like:
+//!
+//! ```
+//! use absorber_core::monitor::{Monitor, MonitorConfig};
+//! use absorber_core::{FreeBallModel, LockedBallModel, Params};
+//!
+//! let p = Params::<f32>::default();
+//! let mut model: FreeBallModel<f32, 3, 13> = FreeBallModel::at_rest(p, 0.0)?;
+//! // Without a twin: `Monitor<f32>`; with a locked-ball twin for the effectiveness figure:
+//! let twin: LockedBallModel<f32, 3, 12> = LockedBallModel::at_rest(p, 0.0)?;
+//! let mut monitor: Monitor<f32, _> = Monitor::with_twin(MonitorConfig::paper(&p)?, &model, twin)?;
+//! let w = 2.0 * core::f32::consts::PI * 3.7;
+//! for k in 1..=400 {
+//!     let base_accel = -0.5e-3 * w * w * (w * k as f32 * 0.003).sin();
+//!     let report = model.step(base_accel)?;
+//!     monitor.record(&model, &report, base_accel)?;
+//! }
+//! let fatigue = monitor.fatigue(); // Miner damage, S_eq [Pa], cycles, incl. the residue
+//! let view = monitor.indicators(); // RMS / peak tip [m], ball RMS [rad], energies [J], ratio
+//! assert!(fatigue.cycles > 0.0 && view.effectiveness.is_some());
+//! # Ok::<(), absorber_core::Error>(())
+//! ```
+//!
+//! Parts (one module each): [`stress`] (root moment and stress from the ANCF curvature),
+//! [`rainflow`] (ASTM E1049 counting with a fixed residue), [`fatigue`] (AASHTO S–N curves,
+//! Miner's rule), [`impacts`] (ring of the last stop impacts), [`indicators`] (windowed RMS,
+//! peak, energies, effectiveness). `docs/monitoring.md` explains every output.
+//!
+//! **Memory** is `size_of::<Monitor<T, Twin, CAP, K, W>>()`, a compile-time constant: `CAP`
+//! residue points, `K` impact records, `W` window blocks, plus the twin model if there is one.
+//! With the defaults (`CAP = 64, K = 16, W = 256`) and `f32` it is about 6.4 kB without a twin.
+//! **Work per sample**: one curvature (8 multiply-adds), the turning-point test, amortized O(1)
+//! rainflow rules (a closed cycle costs one `powf`), one energy evaluation, O(1) window update;
+//! plus one step of the twin if present. Residue and window reads are O(CAP) and O(W).
+
+pub mod fatigue;
+pub mod impacts;
+pub mod indicators;
+pub mod rainflow;
+pub mod stress;
+
+pub use fatigue::{DetailCategory, FatigueSummary, Miner, SnCurve, ThresholdRule};
+pub use impacts::ImpactLog;
+pub use indicators::{IndicatorValues, Indicators, Sample, TwinTip, TwinValue};
+pub use rainflow::{Cycle, Rainflow, TurningPoints};
+pub use stress::{root_curvature, root_curvature_of, RootSection};
+
+use crate::error::Error;
+use crate::model::{Model, StepReport};
+use crate::params::Params;
+use crate::scalar::{lit, Real};
+use crate::scene::{LockedBall, Scene};
+
+/// A model advanced beside the monitored one on the same input, for comparison.
+pub trait Twin<T: Real> {
+    /// What the twin adds to each window block (`()` for [`NoTwin`]).
+    type Value: TwinValue<T>;
+    /// Advances the twin by one step with the same base acceleration \[m/s²\].
+    fn advance(&mut self, base_accel: T) -> Result<(), Error>;
+    /// The twin's tip deflection about its static value \[m\].
+    fn tip(&self) -> Self::Value;
+}
+
+/// No twin: zero-sized, adds nothing to the window and no work per sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NoTwin;
+
+impl<T: Real> Twin<T> for NoTwin {
+    type Value = ();
+    fn advance(&mut self, _: T) -> Result<(), Error> {
+        Ok(())
+    }
+    fn tip(&self) {}
+}
+
+/// The locked-ball model (the paper's passive absorber) as the twin.
+impl<T: Real, const N: usize, const D: usize> Twin<T> for Model<T, LockedBall, N, D> {
+    type Value = TwinTip<T>;
+    fn advance(&mut self, base_accel: T) -> Result<(), Error> {
+        self.step(base_accel).map(|_| ())
+    }
+    fn tip(&self) -> TwinTip<T> {
+        TwinTip(self.tip_deflection() - self.static_tip_deflection())
+    }
+}
+
+/// Monitor settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MonitorConfig<T> {
+    /// Section at the clamp (curvature → moment and stress).
+    pub section: RootSection<T>,
+    /// S–N curve for Miner's rule.
+    pub curve: SnCurve<T>,
+    /// Rainflow hysteresis gate \[Pa\]: reversals of at most this are ignored (0 = none).
+    pub gate: T,
+    /// Samples per window block (≥ 1); the window covers `W · block` samples.
+    pub block: u16,
+}
+
+impl<T: Real> MonitorConfig<T> {
+    /// Defaults for a scene: the rectangle implied by the beam's a and I
+    /// ([`RootSection::rectangle`]), AASHTO category E′ (fillet-welded mast-arm socket) with the
+    /// CAFT cutoff, no gate, blocks of 8 samples.
+    pub fn paper(params: &Params<T>) -> Result<Self, Error> {
+        Ok(Self {
+            section: RootSection::rectangle(&params.beam)?,
+            curve: DetailCategory::EPrime.curve(ThresholdRule::Cutoff),
+            gate: T::zero(),
+            block: 8,
+        })
+    }
+}
+
+/// The monitor. `Tw` = [`NoTwin`] (default, costs nothing) or a
+/// [`LockedBallModel`](crate::LockedBallModel) advanced beside the monitored model;
+/// `CAP` = rainflow residue capacity (≥ 5), `K` = impacts kept, `W` = window blocks.
+#[derive(Clone, Debug)]
+pub struct Monitor<
+    T: Real,
+    Tw: Twin<T> = NoTwin,
+    const CAP: usize = 64,
+    const K: usize = 16,
+    const W: usize = 256,
+> {
+    section: RootSection<T>,
+    rainflow: Rainflow<T, CAP>,
+    miner: Miner<T>,
+    impacts: ImpactLog<T, K>,
+    window: Indicators<T, Tw::Value, W>,
+    twin: Tw,
+    static_strain: T,
+    static_stress: T,
+    stress: T,
+    start_time: T,
+    time: T,
+    samples: u64,
+    rejected: u32,
+    twin_failures: u32,
+}
+
+impl<T: Real, const CAP: usize, const K: usize, const W: usize> Monitor<T, NoTwin, CAP, K, W> {
+    /// Monitor of `model` without a twin; the model's current state is the first sample.
+    pub fn new<S: Scene, const N: usize, const D: usize>(
+        config: MonitorConfig<T>,
+        model: &Model<T, S, N, D>,
+    ) -> Result<Self, Error> {
+        Self::with_twin(config, model, NoTwin)
+    }
+}
+
+impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
+    Monitor<T, Tw, CAP, K, W>
+{
+    /// Monitor of `model` with `twin` (which must start in the same state of the same input).
+    pub fn with_twin<S: Scene, const N: usize, const D: usize>(
+        config: MonitorConfig<T>,
+        model: &Model<T, S, N, D>,
+        twin: Tw,
+    ) -> Result<Self, Error> {
+        let section = config.section;
+        let stress = section.stress(root_curvature(model));
+        let static_stress = section.stress(root_curvature_of(model, model.equilibrium()));
+        if !stress.is_finite() || !static_stress.is_finite() {
+            return Err(Error::NonFiniteState);
+        }
+        let mut rainflow = Rainflow::new(config.gate)?;
+        let mut miner = Miner::new(config.curve)?;
+        rainflow.push(stress, &mut |c| miner.add(&c))?;
+        Ok(Self {
+            section,
+            rainflow,
+            miner,
+            impacts: ImpactLog::new(),
+            window: Indicators::new(config.block),
+            twin,
+            static_strain: model.strain_energy_of(model.equilibrium()),
+            static_stress,
+            stress,
+            start_time: model.time(),
+            time: model.time(),
+            samples: 1,
+            rejected: 0,
+            twin_failures: 0,
+        })
+    }
+
+    /// Records the model's state after a step: `report` is what [`Model::step`] returned and
+    /// `base_accel` its input (passed on to the twin). Returns the root stress \[Pa\].
+    ///
+    /// A non-finite stress is rejected ([`Error::NonFiniteState`]) and nothing is recorded. A
+    /// failing twin step is counted ([`Monitor::twin_failures`]), the twin keeps its state.
+    pub fn record<S: Scene, const N: usize, const D: usize>(
+        &mut self,
+        model: &Model<T, S, N, D>,
+        report: &StepReport<T>,
+        base_accel: T,
+    ) -> Result<T, Error> {
+        let stress = self.section.stress(root_curvature(model));
+        if !stress.is_finite() {
+            self.rejected = self.rejected.saturating_add(1);
+            return Err(Error::NonFiniteState);
+        }
+        let miner = &mut self.miner;
+        self.rainflow.push(stress, &mut |c| miner.add(&c))?;
+        self.stress = stress;
+        self.time = model.time();
+        self.samples += 1;
+        if let Some(impact) = &report.impact {
+            self.impacts.record(impact);
+        }
+        if self.twin.advance(base_accel).is_err() {
+            self.twin_failures = self.twin_failures.saturating_add(1);
+        }
+        let z = T::zero();
+        let e = model.energies(z, z);
+        self.window.push(Sample {
+            tip: model.tip_deflection() - model.static_tip_deflection(),
+            ball: model.ball_relative_angle().map(|(a, _)| a).unwrap_or(z),
+            beam_energy: e.beam_strain - self.static_strain + e.beam_kinetic + e.beam_potential,
+            ball_energy: e.ball_kinetic + e.ball_potential,
+            twin: self.twin.tip(),
+        });
+        Ok(stress)
+    }
+
+    /// Root stress of the last sample (top fibre, tension positive) \[Pa\].
+    pub fn root_stress(&self) -> T {
+        self.stress
+    }
+
+    /// Root stress of the static equilibrium \[Pa\].
+    pub fn static_root_stress(&self) -> T {
+        self.static_stress
+    }
+
+    /// Root bending moment of the last sample (sagging positive) \[N·m\].
+    pub fn root_moment(&self) -> T {
+        -self.stress * self.section.bending_rigidity / self.section.stress_per_curvature
+    }
+
+    /// Fatigue so far, the residue counted as half cycles (as if the history ended now).
+    pub fn fatigue(&self) -> FatigueSummary<T> {
+        self.miner.with_residue(&self.rainflow).summary()
+    }
+
+    /// Fatigue of the closed cycles only (the residue left out: a lower bound).
+    pub fn fatigue_closed(&self) -> FatigueSummary<T> {
+        self.miner.summary()
+    }
+
+    /// Miner damage per hour of monitored time, residue included \[1/h\].
+    pub fn damage_rate_per_hour(&self) -> T {
+        let t = self.elapsed();
+        if t > T::zero() {
+            self.fatigue().damage * lit::<T>(3600.0) / t
+        } else {
+            T::zero()
+        }
+    }
+
+    /// The running Miner accumulator (closed cycles).
+    pub fn miner(&self) -> &Miner<T> {
+        &self.miner
+    }
+
+    /// The rainflow counter.
+    pub fn rainflow(&self) -> &Rainflow<T, CAP> {
+        &self.rainflow
+    }
+
+    /// The impact log.
+    pub fn impacts(&self) -> &ImpactLog<T, K> {
+        &self.impacts
+    }
+
+    /// Window indicators (O(W)).
+    pub fn indicators(&self) -> IndicatorValues<T> {
+        self.window.values()
+    }
+
+    /// The twin.
+    pub fn twin(&self) -> &Tw {
+        &self.twin
+    }
+
+    /// Monitored time \[s\].
+    pub fn elapsed(&self) -> T {
+        self.time - self.start_time
+    }
+
+    /// Samples recorded (the initial state included).
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// Samples rejected as non-finite.
+    pub fn rejected(&self) -> u32 {
+        self.rejected
+    }
+
+    /// Twin steps that failed.
+    pub fn twin_failures(&self) -> u32 {
+        self.twin_failures
+    }
+}
