@@ -32,7 +32,7 @@
 //! **Memory** is `size_of::<Monitor<T, Twin, CAP, K, W>>()`, a compile-time constant: `CAP`
 //! residue points, `K` impact records, `W` window blocks, plus the twin model if there is one.
 //! With the defaults (`CAP = 64, K = 16, W = 256`) and `f32` it is about 6.4 kB without a twin.
-//! **Work per sample**: one curvature (8 multiply-adds), the turning-point test, amortized O(1)
+//! **Work per sample**: one root moment (element 0's residual for the reaction estimate), the turning-point test, amortized O(1)
 //! rainflow rules (a closed cycle costs one `powf`), one energy evaluation, O(1) window update;
 //! plus one step of the twin if present. Residue and window reads are O(CAP) and O(W).
 
@@ -46,7 +46,10 @@ pub use fatigue::{DetailCategory, FatigueSummary, Miner, SnCurve, ThresholdRule}
 pub use impacts::ImpactLog;
 pub use indicators::{IndicatorValues, Indicators, Sample, TwinTip, TwinValue};
 pub use rainflow::{Cycle, Rainflow, TurningPoints};
-pub use stress::{root_curvature, root_curvature_of, RootSection};
+pub use stress::{
+    root_curvature, root_curvature_of, root_reaction_moment, static_root_moment, MomentEstimate,
+    RootSection,
+};
 
 use crate::error::Error;
 use crate::model::{Model, StepReport};
@@ -90,8 +93,10 @@ impl<T: Real, const N: usize, const D: usize> Twin<T> for Model<T, LockedBall, N
 /// Monitor settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MonitorConfig<T> {
-    /// Section at the clamp (curvature → moment and stress).
+    /// Section at the clamp (moment → stress).
     pub section: RootSection<T>,
+    /// How the root moment is obtained.
+    pub moment: MomentEstimate,
     /// S–N curve for Miner's rule.
     pub curve: SnCurve<T>,
     /// Rainflow hysteresis gate \[Pa\]: reversals of at most this are ignored (0 = none).
@@ -102,11 +107,12 @@ pub struct MonitorConfig<T> {
 
 impl<T: Real> MonitorConfig<T> {
     /// Defaults for a scene: the rectangle implied by the beam's a and I
-    /// ([`RootSection::rectangle`]), AASHTO category E′ (fillet-welded mast-arm socket) with the
+    /// ([`RootSection::rectangle`]), the clamp-reaction moment, AASHTO category E′ (fillet-welded mast-arm socket) with the
     /// CAFT cutoff, no gate, blocks of 8 samples.
     pub fn paper(params: &Params<T>) -> Result<Self, Error> {
         Ok(Self {
             section: RootSection::rectangle(&params.beam)?,
+            moment: MomentEstimate::Reaction,
             curve: DetailCategory::EPrime.curve(ThresholdRule::Cutoff),
             gate: T::zero(),
             block: 8,
@@ -126,6 +132,7 @@ pub struct Monitor<
     const W: usize = 256,
 > {
     section: RootSection<T>,
+    estimate: MomentEstimate,
     rainflow: Rainflow<T, CAP>,
     miner: Miner<T>,
     impacts: ImpactLog<T, K>,
@@ -161,8 +168,15 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
         twin: Tw,
     ) -> Result<Self, Error> {
         let section = config.section;
-        let stress = section.stress(root_curvature(model));
-        let static_stress = section.stress(root_curvature_of(model, model.equilibrium()));
+        let estimate = config.moment;
+        let stress = section.stress_of_moment(section.root_moment(model, estimate));
+        let static_moment = match estimate {
+            MomentEstimate::Reaction => static_root_moment(model),
+            MomentEstimate::Curvature => {
+                section.moment(root_curvature_of(model, model.equilibrium()))
+            }
+        };
+        let static_stress = section.stress_of_moment(static_moment);
         if !stress.is_finite() || !static_stress.is_finite() {
             return Err(Error::NonFiniteState);
         }
@@ -171,6 +185,7 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
         rainflow.push(stress, &mut |c| miner.add(&c))?;
         Ok(Self {
             section,
+            estimate,
             rainflow,
             miner,
             impacts: ImpactLog::new(),
@@ -198,7 +213,9 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
         report: &StepReport<T>,
         base_accel: T,
     ) -> Result<T, Error> {
-        let stress = self.section.stress(root_curvature(model));
+        let stress = self
+            .section
+            .stress_of_moment(self.section.root_moment(model, self.estimate));
         if !stress.is_finite() {
             self.rejected = self.rejected.saturating_add(1);
             return Err(Error::NonFiniteState);

@@ -6,19 +6,29 @@
 //! ([`crate::ancf::Element::curvature_vector`] of element 0 at ξ = 0). Positive κ is concave
 //! up (sagging).
 //!
-//! **Moment** `M = E I κ` \[N·m\] (Euler–Bernoulli, the bending term of paper eq. 10), sagging
-//! positive: gravity makes it negative (hogging) at the clamp of the horizontal cantilever.
+//! **Moment** \[N·m\], sagging positive: gravity makes it negative (hogging) at the clamp of the
+//! horizontal cantilever. From the curvature, `M = E I κ` (Euler–Bernoulli, the bending term of
+//! paper eq. 10).
 //!
-//! **Stress** at the top fibre, tension positive: `σ = −M c / I = −E c κ` \[Pa\], with `c` the
-//! distance from the neutral axis to the extreme fibre. The top fibre is the one in tension
+//! **Stress** at the top fibre, tension positive: `σ = −M c / I` \[Pa\] (`= −E c κ`), with `c`
+//! the distance from the neutral axis to the extreme fibre. The top fibre is the one in tension
 //! under gravity (where a mast-arm weld toe cracks), so the static stress is positive.
 //!
-//! **Accuracy.** Cubic Hermite elements reproduce the nodal displacements of Euler–Bernoulli
-//! statics exactly, but their curvature is linear in each element, so under a distributed load
-//! `q` the node value misses the element's fixed-end moment `q l²/12` (l = L/N): at the root the
-//! model's |M| is low by `μ g_eff l² / 12` (paper scene: 0.57 % of the static moment for N = 3,
-//! 0.08 % for N = 8). Tip loads (linear moment) are exact. The displacements converge faster
-//! than this end-of-element curvature, which is why the test tolerance scales with l².
+//! **Two estimates** of the root moment ([`MomentEstimate`]):
+//!
+//! - [`MomentEstimate::Curvature`]: `M = E I r″_y(0)` from element 0. Cubic Hermite elements
+//!   give a linear curvature per element, and with the cable's axial Green strain the coarse
+//!   mesh is also stiffened by membrane locking (the quartic `½ r₂′²` part of ε cannot be
+//!   balanced by the quadratic `r₁′`), so the curvature at the node converges much more slowly
+//!   than the displacements: against exact statics it is 5.8 % low in magnitude with N = 3 and
+//!   0.15 % with N = 8 (`tests/monitor_stress.rs`), i.e. roughly like l³·⁷, not l².
+//! - [`MomentEstimate::Reaction`] (default): the generalized force the clamp exerts on the
+//!   slope coordinate r₂′ of node 0, `M = −R₃` with `R = M_e ä + K_b(u + c u̇) + Q_l(u) − Q_f(g_eff)`
+//!   of element 0 (the row of the clamped coordinate, which no equation of motion constrains).
+//!   A virtual rigid rotation δφ about the clamp moves only that coordinate (δr′ = δφ (0, 1)),
+//!   and does no internal work, so `R₃` equals the moment about the clamp of all gravity,
+//!   base-inertia and inertial forces of the discrete model: exact statics to the Newton
+//!   tolerance for any N, and the consistent dynamic moment. Cost: one element residual.
 
 use crate::beam::gather;
 use crate::error::Error;
@@ -83,6 +93,65 @@ impl<T: Real> RootSection<T> {
     pub fn stress(&self, curvature: T) -> T {
         -self.stress_per_curvature * curvature
     }
+
+    /// Top-fibre bending stress of a moment, `σ = −M c / I` \[Pa\].
+    pub fn stress_of_moment(&self, moment: T) -> T {
+        -moment * self.stress_per_curvature / self.bending_rigidity
+    }
+
+    /// Root moment of the model's current state by `estimate` \[N·m\].
+    pub fn root_moment<S: Scene, const N: usize, const D: usize>(
+        &self,
+        model: &Model<T, S, N, D>,
+        estimate: MomentEstimate,
+    ) -> T {
+        match estimate {
+            MomentEstimate::Curvature => self.moment(root_curvature(model)),
+            MomentEstimate::Reaction => root_reaction_moment(model),
+        }
+    }
+}
+
+/// How the root moment is obtained (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MomentEstimate {
+    /// Clamp reaction on the root slope coordinate: exact statics for any N. Default.
+    Reaction,
+    /// `E I r″_y` at the root node: converges slowly with N (5.8 % low for N = 3).
+    Curvature,
+}
+
+/// Root moment from the clamp's generalized reaction on r₂′ of node 0, `M = −R₃` \[N·m\]
+/// (sagging positive; see the module doc).
+pub fn root_reaction_moment<T: Real, S: Scene, const N: usize, const D: usize>(
+    model: &Model<T, S, N, D>,
+) -> T {
+    let s = model.state();
+    reaction_moment_at(model, &s.q, &s.v, &s.a, s.base_accel)
+}
+
+/// Root reaction moment of the static equilibrium the model started from \[N·m\].
+pub fn static_root_moment<T: Real, S: Scene, const N: usize, const D: usize>(
+    model: &Model<T, S, N, D>,
+) -> T {
+    let z = nalgebra::SVector::<T, D>::zeros();
+    reaction_moment_at(model, model.equilibrium(), &z, &z, T::zero())
+}
+
+fn reaction_moment_at<T: Real, S: Scene, const N: usize, const D: usize>(
+    model: &Model<T, S, N, D>,
+    q: &nalgebra::SVector<T, D>,
+    v: &nalgebra::SVector<T, D>,
+    a: &nalgebra::SVector<T, D>,
+    base_accel: T,
+) -> T {
+    let b = &model.beam;
+    let (u, v, a) = (gather(q, 0), gather(v, 0), gather(a, 0));
+    let (axial, _) = b.element.axial_force_and_tangent(&u);
+    let g_eff = model.params().gravity + base_accel;
+    let r = b.mass * a + b.stiffness * (u + v * b.damping) + axial
+        - b.element.gravity_force(g_eff);
+    -r.get(3).copied().unwrap_or(T::zero())
 }
 
 /// Signed root curvature κ = r″_y at x = 0 of element 0 \[1/m\] (see the module doc).
