@@ -31,7 +31,9 @@
 //!
 //! **Memory** is `size_of::<Monitor<T, Twin, CAP, K, W>>()`, a compile-time constant: `CAP`
 //! residue points, `K` impact records, `W` window blocks, plus the twin model if there is one.
-//! With the defaults (`CAP = 64, K = 16, W = 256`) and `f32` it is about 6.4 kB without a twin.
+//! With the defaults (`CAP = 128, K = 16, W = 256`) and `f32` it is 7.2 kB without a twin
+//! (printed by `tests/monitor_model.rs`). `CAP = 128` holds the converging residue a start-up
+//! transient leaves (about 65 points in the paper scene at 3.70 Hz, see [`rainflow`]).
 //! **Work per sample**: one root moment (element 0's residual for the reaction estimate), the turning-point test, amortized O(1)
 //! rainflow rules (a closed cycle costs one `powf`), one energy evaluation, O(1) window update;
 //! plus one step of the twin if present. Residue and window reads are O(CAP) and O(W).
@@ -127,7 +129,7 @@ impl<T: Real> MonitorConfig<T> {
 pub struct Monitor<
     T: Real,
     Tw: Twin<T> = NoTwin,
-    const CAP: usize = 64,
+    const CAP: usize = 128,
     const K: usize = 16,
     const W: usize = 256,
 > {
