@@ -182,8 +182,7 @@ impl<T: Real> Element<T> {
 
     /// Axial Green strain at ξ from the displacement `u` (eq. 11, cancellation free).
     pub fn axial_strain(&self, u: &ElementVector<T>, xi: T) -> T {
-        let d = apply(&shape_x(self.length, xi), u);
-        d.x + lit::<T>(0.5) * d.norm_squared()
+        self.axial_point(u, xi).1
     }
 
     /// Curvature vector `r″ = S_xx u` at ξ \[1/m\] (the paper's κ = |r″|).
@@ -191,28 +190,42 @@ impl<T: Real> Element<T> {
         apply(&shape_xx(self.length, xi), u)
     }
 
-    /// Axial elastic force `Q_l = ∫ EA ε S_xᵀ r′ dx` (eqs. 12–13) and its exact tangent
+    /// At Gauss point ξ: the shape derivatives, the strain ε and `g = S_xᵀ r′` (8-vector).
+    #[inline]
+    fn axial_point(&self, u: &ElementVector<T>, xi: T) -> ([T; 4], T, ElementVector<T>) {
+        let sx = shape_x(self.length, xi);
+        let d = apply(&sx, u);
+        let eps = d.x + lit::<T>(0.5) * d.norm_squared();
+        let (r1, r2) = (T::one() + d.x, d.y); // r′ = (1 + d₁, d₂)
+        let mut g = ElementVector::zeros();
+        for (k, s) in sx.iter().enumerate() {
+            g[2 * k] = *s * r1;
+            g[2 * k + 1] = *s * r2;
+        }
+        (sx, eps, g)
+    }
+
+    /// Axial elastic force `Q_l = ∫ EA ε S_xᵀ r′ dx` (eqs. 12–13), by 5-point Gauss (exact).
+    pub fn axial_force(&self, u: &ElementVector<T>) -> ElementVector<T> {
+        let mut force = ElementVector::zeros();
+        for (xi, w) in GAUSS5 {
+            let (_, eps, g) = self.axial_point(u, lit::<T>(xi));
+            force += g * (self.axial_rigidity * self.length * lit::<T>(w) * eps);
+        }
+        force
+    }
+
+    /// Axial elastic force (as [`Element::axial_force`]) and its exact tangent
     /// `K_l = ∫ EA [(S_xᵀ r′)(S_xᵀ r′)ᵀ + ε S_xᵀ S_x] dx`, by 5-point Gauss (exact).
     pub fn axial_force_and_tangent(
         &self,
         u: &ElementVector<T>,
     ) -> (ElementVector<T>, ElementMatrix<T>) {
-        let l = self.length;
         let mut force = ElementVector::zeros();
         let mut tangent = ElementMatrix::zeros();
         for (xi, w) in GAUSS5 {
-            let sx = shape_x(l, lit::<T>(xi));
-            let d = apply(&sx, u);
-            let eps = d.x + lit::<T>(0.5) * d.norm_squared();
-            let r1 = T::one() + d.x; // r′ = (1 + d₁, d₂)
-            let r2 = d.y;
-            // g = S_xᵀ r′ (8-vector).
-            let mut g = ElementVector::zeros();
-            for (k, s) in sx.iter().enumerate() {
-                g[2 * k] = *s * r1;
-                g[2 * k + 1] = *s * r2;
-            }
-            let c = self.axial_rigidity * l * lit::<T>(w);
+            let (sx, eps, g) = self.axial_point(u, lit::<T>(xi));
+            let c = self.axial_rigidity * self.length * lit::<T>(w);
             force += g * (c * eps);
             tangent += g * g.transpose() * c;
             for i in 0..4 {
@@ -230,7 +243,7 @@ impl<T: Real> Element<T> {
     pub fn axial_energy(&self, u: &ElementVector<T>) -> T {
         let mut e = T::zero();
         for (xi, w) in GAUSS5 {
-            let eps = self.axial_strain(u, lit::<T>(xi));
+            let (_, eps, _) = self.axial_point(u, lit::<T>(xi));
             e += lit::<T>(0.5 * w) * self.axial_rigidity * self.length * eps * eps;
         }
         e

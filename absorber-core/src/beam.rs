@@ -45,7 +45,7 @@ pub fn gather<T: Real, const D: usize>(x: &SVector<T, D>, k: usize) -> ElementVe
 }
 
 impl<T: Real> Beam<T> {
-    /// Adds the beam's residual and (when `jac` is given) its tangent for all `n` elements.
+    /// Adds the beam's residual and, when `jac` is given, its tangent for all `n` elements.
     #[allow(clippy::too_many_arguments)]
     pub fn assemble<const D: usize>(
         &self,
@@ -56,16 +56,23 @@ impl<T: Real> Beam<T> {
         g_eff: T,
         ch: &Chain<T>,
         r: &mut SVector<T, D>,
-        jac: &mut SMatrix<T, D, D>,
+        mut jac: Option<&mut SMatrix<T, D, D>>,
     ) {
         let weight = self.element.gravity_force(g_eff);
         for k in 0..n {
             let (qe, ve, ae) = (gather(q, k), gather(v, k), gather(a, k));
-            let (qa, ka) = self.element.axial_force_and_tangent(&qe);
-            let re = self.mass * ae + self.stiffness * (qe + ve * self.damping) + qa - weight;
-            let je = self.mass * ch.c_m
-                + self.stiffness * (ch.c_q + ch.c_v * self.damping)
-                + ka * ch.c_q;
+            let elastic = self.stiffness * (qe + ve * self.damping);
+            let (qa, je) = match jac {
+                Some(_) => {
+                    let (qa, ka) = self.element.axial_force_and_tangent(&qe);
+                    let je = self.mass * ch.c_m
+                        + self.stiffness * (ch.c_q + ch.c_v * self.damping)
+                        + ka * ch.c_q;
+                    (qa, Some(je))
+                }
+                None => (self.element.axial_force(&qe), None),
+            };
+            let re = self.mass * ae + elastic + qa - weight;
             for i in 0..8 {
                 let Some(gi) = global_index(k, i) else {
                     continue;
@@ -73,12 +80,14 @@ impl<T: Real> Beam<T> {
                 if let Some(dst) = r.get_mut(gi) {
                     *dst += re[i];
                 }
-                for j in 0..8 {
-                    let Some(gj) = global_index(k, j) else {
-                        continue;
-                    };
-                    if let Some(dst) = jac.get_mut((gi, gj)) {
-                        *dst += je[(i, j)];
+                if let (Some(jac), Some(je)) = (jac.as_deref_mut(), je.as_ref()) {
+                    for j in 0..8 {
+                        let Some(gj) = global_index(k, j) else {
+                            continue;
+                        };
+                        if let Some(dst) = jac.get_mut((gi, gj)) {
+                            *dst += je[(i, j)];
+                        }
                     }
                 }
             }

@@ -150,6 +150,135 @@ impl<T: Real, const K: usize> Neg for Dual<T, K> {
     }
 }
 
+/// The arithmetic the tip and ball terms need, so that one source evaluates them either with
+/// their exact Jacobian ([`Dual`]) or as plain values ([`Plain`], residual only).
+pub trait Number<T: Real>:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// A constant.
+    fn constant(re: T) -> Self;
+    /// A variable with derivative `seed` along direction `k`.
+    fn variable(re: T, k: usize, seed: T) -> Self;
+    /// The value.
+    fn re(&self) -> T;
+    /// `(sin, cos)`.
+    fn sin_cos(self) -> (Self, Self);
+    /// `atan2(self, x)`.
+    fn atan2(self, x: Self) -> Self;
+    /// Square root.
+    fn sqrt(self) -> Self;
+    /// Multiplies by a plain scalar.
+    fn scale(self, s: T) -> Self;
+    /// Adds a plain scalar.
+    fn add_re(self, s: T) -> Self;
+}
+
+impl<T: Real, const K: usize> Number<T> for Dual<T, K> {
+    #[inline]
+    fn constant(re: T) -> Self {
+        Dual::constant(re)
+    }
+    #[inline]
+    fn variable(re: T, k: usize, seed: T) -> Self {
+        Dual::variable(re, k, seed)
+    }
+    #[inline]
+    fn re(&self) -> T {
+        self.re
+    }
+    #[inline]
+    fn sin_cos(self) -> (Self, Self) {
+        let (s, c) = self.re.sin_cos();
+        (self.chain(s, c), self.chain(c, -s))
+    }
+    #[inline]
+    fn atan2(self, x: Self) -> Self {
+        Dual::atan2(self, x)
+    }
+    #[inline]
+    fn sqrt(self) -> Self {
+        let r = self.re.sqrt();
+        self.chain(r, T::one() / (r + r))
+    }
+    #[inline]
+    fn scale(self, s: T) -> Self {
+        Dual::scale(self, s)
+    }
+    #[inline]
+    fn add_re(self, s: T) -> Self {
+        Dual::add_re(self, s)
+    }
+}
+
+/// A plain value behind the [`Number`] interface (residual without Jacobian).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plain<T>(pub T);
+
+macro_rules! plain_op {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl<T: Real> $tr for Plain<T> {
+            type Output = Self;
+            #[inline]
+            fn $f(self, o: Self) -> Self {
+                Plain(self.0 $op o.0)
+            }
+        }
+    };
+}
+plain_op!(Add, add, +);
+plain_op!(Sub, sub, -);
+plain_op!(Mul, mul, *);
+plain_op!(Div, div, /);
+
+impl<T: Real> Neg for Plain<T> {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        Plain(-self.0)
+    }
+}
+
+impl<T: Real> Number<T> for Plain<T> {
+    #[inline]
+    fn constant(re: T) -> Self {
+        Plain(re)
+    }
+    #[inline]
+    fn variable(re: T, _k: usize, _seed: T) -> Self {
+        Plain(re)
+    }
+    #[inline]
+    fn re(&self) -> T {
+        self.0
+    }
+    #[inline]
+    fn sin_cos(self) -> (Self, Self) {
+        let (s, c) = self.0.sin_cos();
+        (Plain(s), Plain(c))
+    }
+    #[inline]
+    fn atan2(self, x: Self) -> Self {
+        Plain(self.0.atan2(x.0))
+    }
+    #[inline]
+    fn sqrt(self) -> Self {
+        Plain(self.0.sqrt())
+    }
+    #[inline]
+    fn scale(self, s: T) -> Self {
+        Plain(self.0 * s)
+    }
+    #[inline]
+    fn add_re(self, s: T) -> Self {
+        Plain(self.0 + s)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,12 +2,13 @@
 
 use crate::ancf::Element;
 use crate::beam::Beam;
+use crate::dual::Plain;
 use crate::error::Error;
 use crate::linalg;
-use crate::params::{ImpactModel, Params};
+use crate::params::{ImpactModel, NewtonKind, Params};
 use crate::scalar::{is_positive, lit, to_f64, Real};
 use crate::scene::{BallKind, Scene};
-use crate::tip::{self, BallMode, Chain, LocalState, TipInertia, LOCAL};
+use crate::tip::{self, BallMode, Chain, LocalState, TipInertia, D5, LOCAL};
 use core::marker::PhantomData;
 use nalgebra::{SMatrix, SVector};
 
@@ -85,6 +86,14 @@ pub struct StepReport<T> {
     pub impact: Option<Impact<T>>,
 }
 
+/// The factored Newton matrix kept by modified Newton, with what it was built for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CachedJacobian<T, const D: usize> {
+    lu: linalg::Lu<T, D>,
+    c_q: T,
+    contact: Contact,
+}
+
 /// Result of one Newton solve.
 struct Solved<T, const D: usize> {
     x: SVector<T, D>,
@@ -107,6 +116,8 @@ pub struct Model<T, S, const N: usize, const D: usize> {
     pub(crate) equilibrium: SVector<T, D>,
     /// Scale of each unknown for the convergence test: beam length for positions, 1 otherwise.
     pub(crate) scale: SVector<T, D>,
+    /// Modified Newton's factored matrix (not part of the state: a cache).
+    pub(crate) jacobian: Option<CachedJacobian<T, D>>,
     _scene: PhantomData<S>,
 }
 
@@ -172,6 +183,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             },
             equilibrium: z,
             scale,
+            jacobian: None,
             _scene: PhantomData,
         })
     }
@@ -256,9 +268,29 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         contact: Contact,
         plumb: bool,
     ) -> (SVector<T, D>, SMatrix<T, D, D>, T) {
-        let mut r = SVector::<T, D>::zeros();
         let mut jac = SMatrix::<T, D, D>::zeros();
-        self.beam.assemble(N, q, v, a, g_eff, ch, &mut r, &mut jac);
+        let (r, force) = self.residual_into(q, v, a, g_eff, ch, contact, plumb, Some(&mut jac));
+        (r, jac, force)
+    }
+
+    /// Residual of the equations of motion, its Jacobian along `ch` added into `jac` when given
+    /// (the tip terms then run in dual numbers; without it, in plain values), and the
+    /// generalized contact force on the ball along θ.
+    #[allow(clippy::too_many_arguments)]
+    fn residual_into(
+        &self,
+        q: &SVector<T, D>,
+        v: &SVector<T, D>,
+        a: &SVector<T, D>,
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+        plumb: bool,
+        mut jac: Option<&mut SMatrix<T, D, D>>,
+    ) -> (SVector<T, D>, T) {
+        let mut r = SVector::<T, D>::zeros();
+        self.beam
+            .assemble(N, q, v, a, g_eff, ch, &mut r, jac.as_deref_mut());
         let mut contact_force = T::zero();
         if S::HAS_TIP {
             let x = Self::local(q, v, a);
@@ -266,22 +298,37 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 BallMode::Free if plumb => BallMode::Plumb,
                 m => m,
             };
-            let (rows, lambda) =
-                tip::residual(&self.inertia, &x, ch, g_eff, mode, S::EXTRA_DOFS == 1);
-            contact_force = lambda;
             let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
-            for (i, row) in rows.iter().enumerate().take(n) {
-                if let Some(dst) = r.get_mut(Self::END + i) {
-                    *dst += row.re;
+            let unknown = S::EXTRA_DOFS == 1;
+            match jac {
+                Some(jac) => {
+                    let (rows, lambda) =
+                        tip::residual::<T, D5<T>>(&self.inertia, &x, ch, g_eff, mode, unknown);
+                    contact_force = lambda;
+                    for (i, row) in rows.iter().enumerate().take(n) {
+                        if let Some(dst) = r.get_mut(Self::END + i) {
+                            *dst += row.re;
+                        }
+                        for (j, d) in row.du.iter().enumerate().take(n) {
+                            if let Some(dst) = jac.get_mut((Self::END + i, Self::END + j)) {
+                                *dst += *d;
+                            }
+                        }
+                    }
                 }
-                for (j, d) in row.du.iter().enumerate().take(n) {
-                    if let Some(dst) = jac.get_mut((Self::END + i, Self::END + j)) {
-                        *dst += *d;
+                None => {
+                    let (rows, lambda) =
+                        tip::residual::<T, Plain<T>>(&self.inertia, &x, ch, g_eff, mode, unknown);
+                    contact_force = lambda;
+                    for (i, row) in rows.iter().enumerate().take(n) {
+                        if let Some(dst) = r.get_mut(Self::END + i) {
+                            *dst += row.0;
+                        }
                     }
                 }
             }
         }
-        (r, jac, contact_force)
+        (r, contact_force)
     }
 
     /// Newton–Raphson on `x` with `q = q₀ + c_q x`, `v = v₀ + c_v x`, `a = a₀ + c_m x`, from the
@@ -298,10 +345,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         g_eff: T,
         contact: Contact,
     ) -> Result<Solved<T, D>, Error> {
-        self.newton_with(q0, v0, a0, x, ch, c_pos, g_eff, contact, false)
+        self.newton_with(q0, v0, a0, x, ch, c_pos, g_eff, contact, false, None)
     }
 
-    /// [`Model::newton`], optionally with a free ball pinned plumb (static solve).
+    /// [`Model::newton`], optionally with a free ball pinned plumb (static solve), and with a
+    /// slot for modified Newton's factored matrix (`None`: full Newton).
     #[allow(clippy::too_many_arguments)]
     fn newton_with(
         &self,
@@ -314,19 +362,50 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         g_eff: T,
         contact: Contact,
         plumb: bool,
+        mut cache: Option<&mut Option<CachedJacobian<T, D>>>,
     ) -> Result<Solved<T, D>, Error> {
         let max = self.params.integrator.max_iterations;
         let tol = self.params.integrator.tolerance;
         let mut increment = T::zero();
+        // Modified Newton: rebuild when the cached matrix was made for another step length or
+        // contact, or when an iteration with it contracts by less than half.
+        let mut rebuild = false;
+        let mut previous = T::zero();
         for it in 1..=max {
             let q = q0 + x * ch.c_q;
             let v = v0 + x * ch.c_v;
             let a = a0 + x * ch.c_m;
-            let (r, jac, _) = self.assemble_with(&q, &v, &a, g_eff, ch, contact, plumb);
-            if !r.iter().all(|z| z.is_finite()) || !jac.iter().all(|z| z.is_finite()) {
-                return Err(Error::NonFiniteState);
-            }
-            let dx = linalg::solve(jac, -r).ok_or(Error::Singular)?;
+            let reuse = match cache.as_deref() {
+                Some(Some(c)) => !rebuild && c.c_q == ch.c_q && c.contact == contact,
+                _ => false,
+            };
+            let (dx, fresh) = if reuse {
+                let (r, _) = self.residual_into(&q, &v, &a, g_eff, ch, contact, plumb, None);
+                if !r.iter().all(|z| z.is_finite()) {
+                    return Err(Error::NonFiniteState);
+                }
+                let lu = cache
+                    .as_deref()
+                    .and_then(|c| c.as_ref())
+                    .map(|c| c.lu)
+                    .ok_or(Error::Singular)?;
+                (lu.solve(-r).ok_or(Error::Singular)?, false)
+            } else {
+                let (r, jac, _) = self.assemble_with(&q, &v, &a, g_eff, ch, contact, plumb);
+                if !r.iter().all(|z| z.is_finite()) || !jac.iter().all(|z| z.is_finite()) {
+                    return Err(Error::NonFiniteState);
+                }
+                let lu = linalg::factor(jac).ok_or(Error::Singular)?;
+                if let Some(slot) = cache.as_deref_mut() {
+                    *slot = Some(CachedJacobian {
+                        lu,
+                        c_q: ch.c_q,
+                        contact,
+                    });
+                }
+                rebuild = false;
+                (lu.solve(-r).ok_or(Error::Singular)?, true)
+            };
             if !dx.iter().all(|z| z.is_finite()) {
                 return Err(Error::Singular);
             }
@@ -353,6 +432,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                     increment,
                 });
             }
+            if !fresh && it > 1 && increment > previous * lit::<T>(0.5) {
+                rebuild = true;
+            }
+            previous = increment;
         }
         Err(Error::NoConvergence {
             iterations: max,
@@ -367,14 +450,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// reference of the potentials. On error the model is unchanged.
     pub fn solve_static(&mut self) -> Result<u32, Error> {
         let z = SVector::<T, D>::zeros();
-        let ch = Chain { c_q: T::one(), c_v: T::zero(), c_m: T::zero() };
+        let ch = Chain {
+            c_q: T::one(),
+            c_v: T::zero(),
+            c_m: T::zero(),
+        };
         let (quarter, smallest) = (lit::<T>(0.25), lit::<T>(1.0 / 1024.0));
         let (mut q, mut done, mut step) = (z, T::zero(), quarter);
         let mut iterations = 0;
         while done < T::one() {
             let target = (done + step).min(T::one());
             let g = self.params.gravity * target;
-            match self.newton_with(&z, &z, &z, q, &ch, T::one(), g, Contact::Off, true) {
+            match self.newton_with(&z, &z, &z, q, &ch, T::one(), g, Contact::Off, true, None) {
                 Ok(s) => {
                     q = s.x;
                     iterations += s.iterations;
@@ -390,7 +477,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             }
         }
         self.equilibrium = q;
-        self.state = State { q, v: z, a: z, time: T::zero(), base_accel: T::zero(), contact: Contact::Off };
+        self.state = State {
+            q,
+            v: z,
+            a: z,
+            time: T::zero(),
+            base_accel: T::zero(),
+            contact: Contact::Off,
+        };
         Ok(iterations)
     }
 
@@ -497,12 +591,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         )
     }
 
-    /// One Newmark step of length `h` from `s` to the input `base_accel` at its end.
+    /// One Newmark step of length `h` from `s` to the input `base_accel` at its end, with
+    /// modified Newton's matrix slot `cache`.
     fn newmark(
         &self,
         s: &State<T, D>,
         h: T,
         base_accel: T,
+        cache: &mut Option<CachedJacobian<T, D>>,
     ) -> Result<(State<T, D>, Solved<T, D>), Error> {
         let i = &self.params.integrator;
         let half = lit::<T>(0.5);
@@ -513,15 +609,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             c_v: i.gamma * h,
             c_m: T::one(),
         };
-        let solved = self.newton(
-            &q_pred,
-            &v_pred,
-            &SVector::zeros(),
-            s.a,
-            &ch,
-            ch.c_q,
-            self.effective_gravity(base_accel),
-            s.contact,
+        let slot = match i.newton {
+            NewtonKind::Full => None,
+            NewtonKind::Modified => Some(cache),
+        };
+        let g_eff = self.effective_gravity(base_accel);
+        let z = SVector::zeros();
+        let solved = self.newton_with(
+            &q_pred, &v_pred, &z, s.a, &ch, ch.c_q, g_eff, s.contact, false, slot,
         )?;
         let a = solved.x;
         let mut next = State {
@@ -572,9 +667,23 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         if !base_accel.is_finite() {
             return Err(Error::NonFiniteInput);
         }
+        let mut cache = self.jacobian.take();
+        let result = self.advance(base_accel, &mut cache);
+        self.jacobian = cache;
+        let (next, report) = result?;
+        self.state = next;
+        Ok(report)
+    }
+
+    /// The step proper: the next state and the report, or an error (nothing is changed).
+    fn advance(
+        &self,
+        base_accel: T,
+        cache: &mut Option<CachedJacobian<T, D>>,
+    ) -> Result<(State<T, D>, StepReport<T>), Error> {
         let h = self.params.integrator.step;
         let start = self.state;
-        let (mut next, solved) = self.newmark(&start, h, base_accel)?;
+        let (mut next, solved) = self.newmark(&start, h, base_accel, cache)?;
         let mut report = StepReport {
             iterations: solved.iterations,
             increment: solved.increment,
@@ -592,8 +701,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                             &next,
                             h,
                             base_accel,
-                            alpha1,
                             &mut report,
+                            cache,
                         )?;
                     }
                 }
@@ -615,8 +724,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         {
             return Err(Error::NonFiniteState);
         }
-        self.state = next;
-        Ok(report)
+        Ok((next, report))
     }
 
     /// Generalized contact force the stop puts on the ball along θ in a held state.
@@ -627,15 +735,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             c_v: z,
             c_m: z,
         };
-        let (_, _, f) = self.assemble(
-            &s.q,
-            &s.v,
-            &s.a,
-            self.effective_gravity(s.base_accel),
-            &ch,
-            s.contact,
-        );
-        f
+        let g = self.effective_gravity(s.base_accel);
+        self.residual_into(&s.q, &s.v, &s.a, g, &ch, s.contact, false, None)
+            .1
     }
 
     /// Splits a step that crossed a stop: Newmark to the crossing (located by linear
@@ -646,9 +748,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         trial: &State<T, D>,
         h: T,
         base_accel: T,
-        alpha1: T,
         report: &mut StepReport<T>,
+        cache: &mut Option<CachedJacobian<T, D>>,
     ) -> Result<State<T, D>, Error> {
+        let alpha1 = self.relative_angle(trial);
         let stop = self.params.ball.stop_angle;
         let side = if alpha1 > T::zero() {
             Side::Positive
@@ -660,21 +763,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
         let mut mid = if h1 > h * lit(1e-6) {
-            let (m, s) = self.newmark(start, h1, accel_mid)?;
+            let (m, s) = self.newmark(start, h1, accel_mid, cache)?;
             report.iterations += s.iterations;
             report.increment = report.increment.max(s.increment);
             m
         } else {
             *start
         };
-        let _ = trial;
         let impact = self.impact(&mut mid, side)?;
         let acc = self.consistent_acceleration(&mid)?;
         report.iterations += acc.iterations;
         mid.a = acc.x;
         let rest = h - h1;
         let mut end = if rest > h * lit(1e-6) {
-            let (e, s) = self.newmark(&mid, rest, base_accel)?;
+            let (e, s) = self.newmark(&mid, rest, base_accel, cache)?;
             report.iterations += s.iterations;
             report.increment = report.increment.max(s.increment);
             e

@@ -56,10 +56,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let m = self.mass_matrix(&self.state, crate::model::Contact::Off);
         let mut p = T::zero();
         for node in 0..N {
-            if let Some(row) = m.fixed_rows::<1>(4 * node + 1).iter().zip(self.state.v.iter()).try_fold(
-                T::zero(),
-                |acc, (mij, vj)| Some(acc + *mij * *vj),
-            ) {
+            if let Some(row) = m
+                .fixed_rows::<1>(4 * node + 1)
+                .iter()
+                .zip(self.state.v.iter())
+                .try_fold(T::zero(), |acc, (mij, vj)| Some(acc + *mij * *vj))
+            {
                 p += row;
             }
         }

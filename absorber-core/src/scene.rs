@@ -2,7 +2,7 @@
 //!
 //! A scene is a zero-sized marker type. Its associated constants are known to the compiler, so
 //! every `if S::HAS_BALL { … }` in the model is folded away: the beam-only scene's binary holds
-//! no tip or ball code, and only [`FreeBall`] scenes have the ball angle as an unknown.
+//! no tip or ball code, and only [`FreeBall`] scenes have an extra unknown (the ball spin φ).
 //!
 //! The number of unknowns `D` is checked at compile time: a free ball has `4N + 1`.
 //!

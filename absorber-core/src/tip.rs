@@ -29,14 +29,15 @@
 //! Everything is evaluated in [`Dual`] arithmetic seeded with the Newmark chain coefficients,
 //! so one pass gives the residual and its exact Jacobian `c_m ∂r/∂ä + c_v ∂r/∂ȧ + c_q ∂r/∂q`.
 
-use crate::dual::Dual;
+use crate::dual::{Dual, Number, Plain};
 use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::BallKind;
 
 /// Local coordinates: end-node displacement (x, y), slope displacement (x, y), ball spin φ.
 pub const LOCAL: usize = 5;
-type D5<T> = Dual<T, LOCAL>;
+/// Dual number over the local coordinates.
+pub type D5<T> = Dual<T, LOCAL>;
 
 /// How the ball moves in the current evaluation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -133,32 +134,36 @@ pub struct Chain<T> {
     pub c_m: T,
 }
 
-/// Tip rotation kinematics ψ, ψ̇, ψ̈ as duals.
-struct Psi<T> {
-    psi: D5<T>,
-    rate: D5<T>,
-    accel: D5<T>,
-    jx: D5<T>,
-    jy: D5<T>,
+/// Tip rotation kinematics: ψ, ψ̇, ψ̈, its gradient j and (cos ψ, sin ψ) = (a₃, a₄)/|a|
+/// (no trigonometric call).
+struct Psi<A> {
+    psi: A,
+    rate: A,
+    accel: A,
+    jx: A,
+    jy: A,
+    cos: A,
+    sin: A,
 }
 
-fn psi_kinematics<T: Real>(x: &LocalState<T>, ch: &Chain<T>) -> Psi<T> {
-    let var = |k: usize| -> (D5<T>, D5<T>, D5<T>) {
+fn psi_kinematics<T: Real, A: Number<T>>(x: &LocalState<T>, ch: &Chain<T>) -> Psi<A> {
+    let var = |k: usize| -> (A, A, A) {
         let (q, v, a) = (
             x.q.get(k).copied().unwrap_or(T::zero()),
             x.v.get(k).copied().unwrap_or(T::zero()),
             x.a.get(k).copied().unwrap_or(T::zero()),
         );
         (
-            D5::variable(q, k, ch.c_q),
-            D5::variable(v, k, ch.c_v),
-            D5::variable(a, k, ch.c_m),
+            A::variable(q, k, ch.c_q),
+            A::variable(v, k, ch.c_v),
+            A::variable(a, k, ch.c_m),
         )
     };
     let (u3, v3, a3dd) = var(2);
     let (a4, v4, a4dd) = var(3);
     let a3 = u3.add_re(T::one()); // slope x = 1 + displacement
     let s2 = a3 * a3 + a4 * a4;
+    let len = s2.sqrt();
     let jx = -a4 / s2;
     let jy = a3 / s2;
     let rate = jx * v3 + jy * v4;
@@ -170,13 +175,15 @@ fn psi_kinematics<T: Real>(x: &LocalState<T>, ch: &Chain<T>) -> Psi<T> {
         accel,
         jx,
         jy,
+        cos: a3 / len,
+        sin: a4 / len,
     }
 }
 
 /// Tip rotation ψ and rate ψ̇ (plain values) from the local state.
 pub fn psi_and_rate<T: Real>(x: &LocalState<T>) -> (T, T) {
     let z = T::zero();
-    let p = psi_kinematics(
+    let p: Psi<Plain<T>> = psi_kinematics(
         x,
         &Chain {
             c_q: z,
@@ -184,13 +191,13 @@ pub fn psi_and_rate<T: Real>(x: &LocalState<T>) -> (T, T) {
             c_m: z,
         },
     );
-    (p.psi.re, p.rate.re)
+    (p.psi.0, p.rate.0)
 }
 
 /// Tip rotation ψ, rate and acceleration (plain values).
 pub fn psi_all<T: Real>(x: &LocalState<T>) -> (T, T, T) {
     let z = T::zero();
-    let p = psi_kinematics(
+    let p: Psi<Plain<T>> = psi_kinematics(
         x,
         &Chain {
             c_q: z,
@@ -198,7 +205,7 @@ pub fn psi_all<T: Real>(x: &LocalState<T>) -> (T, T, T) {
             c_m: z,
         },
     );
-    (p.psi.re, p.rate.re, p.accel.re)
+    (p.psi.0, p.rate.0, p.accel.0)
 }
 
 /// Orbit angle θ and its rate from the local state of a free ball (spin φ at index 4).
@@ -220,24 +227,26 @@ pub fn gap_gradient<T: Real>(inertia: &TipInertia<T>, x: &LocalState<T>) -> [T; 
     [T::zero(), T::zero(), -k * a4 / s2, k * a3 / s2, -k]
 }
 
-/// Residual rows of the tip body and ball on the local coordinates, with their Jacobian.
+/// Residual rows of the tip body and ball on the local coordinates, with their Jacobian when
+/// `A` is a [`Dual`] (plain values with [`Plain`]).
 ///
-/// Returns the five dual rows (value = generalized force, `du[k]` = Jacobian entry along local
-/// direction k) and the value of `E_θ` (the generalized contact force the housing or stop
-/// exerts on the ball along θ; zero without a ball). Row 4 is `E_θ` for a free ball, the
-/// acceleration constraint `θ̈ − ψ̈` for a ball held on a stop, and zero otherwise.
-pub fn residual<T: Real>(
+/// Returns the five rows (value = generalized force, for duals `du[k]` = Jacobian entry along
+/// local direction k) and the value of `E_θ` (the generalized contact force the housing or stop
+/// exerts on the ball along θ; zero without a ball). Row 4 is `E_φ` for a free ball, the
+/// acceleration constraint `φ̈ − ψ̈` for a ball held on a stop (held: `φ = ψ − α_lock ρ/r_b`),
+/// θ itself for a ball pinned plumb (static solve), and zero otherwise.
+pub fn residual<T: Real, A: Number<T>>(
     inertia: &TipInertia<T>,
     x: &LocalState<T>,
     ch: &Chain<T>,
     g_eff: T,
     mode: BallMode<T>,
     free_theta_is_unknown: bool,
-) -> ([D5<T>; LOCAL], T) {
-    let ps = psi_kinematics(x, ch);
-    let xdd = D5::variable(x.a[0], 0, ch.c_m);
-    let ydd_g = D5::variable(x.a[1], 1, ch.c_m).add_re(g_eff);
-    let (s_psi, c_psi) = (ps.psi.sin(), ps.psi.cos());
+) -> ([A; LOCAL], T) {
+    let ps: Psi<A> = psi_kinematics(x, ch);
+    let xdd = A::variable(x.a[0], 0, ch.c_m);
+    let ydd_g = A::variable(x.a[1], 1, ch.c_m).add_re(g_eff);
+    let (s_psi, c_psi) = (ps.sin, ps.cos);
     let rate2 = ps.rate * ps.rate;
 
     let mut e_x = xdd.scale(inertia.total_mass)
@@ -246,7 +255,7 @@ pub fn residual<T: Real>(
         + (s_psi * ps.accel + c_psi * rate2).scale(inertia.tip_moment);
     let mut e_psi =
         (c_psi * xdd + s_psi * ydd_g).scale(inertia.tip_moment) + ps.accel.scale(inertia.j_psi);
-    let mut row4 = D5::constant(T::zero());
+    let mut row4 = A::constant(T::zero());
     let mut contact = T::zero();
 
     let theta = match mode {
@@ -255,16 +264,16 @@ pub fn residual<T: Real>(
         BallMode::Free | BallMode::Plumb => {
             // θ = (R_tr ψ − r_b φ)/ρ, and likewise for its rates (linear in ψ and φ).
             let (kt, ks) = (inertia.orbit_per_tilt, inertia.orbit_per_spin);
-            let orbit = |p: D5<T>, f: D5<T>| p.scale(kt) - f.scale(ks);
+            let orbit = |p: A, f: A| p.scale(kt) - f.scale(ks);
             Some((
-                orbit(ps.psi, D5::variable(x.q[4], 4, ch.c_q)),
-                orbit(ps.rate, D5::variable(x.v[4], 4, ch.c_v)),
-                orbit(ps.accel, D5::variable(x.a[4], 4, ch.c_m)),
+                orbit(ps.psi, A::variable(x.q[4], 4, ch.c_q)),
+                orbit(ps.rate, A::variable(x.v[4], 4, ch.c_v)),
+                orbit(ps.accel, A::variable(x.a[4], 4, ch.c_m)),
             ))
         }
     };
     if let Some((th, th_d, th_dd)) = theta {
-        let (s_th, c_th) = (th.sin(), th.cos());
+        let (s_th, c_th) = th.sin_cos();
         let th_d2 = th_d * th_d;
         e_x = e_x + (c_th * th_dd - s_th * th_d2).scale(inertia.ball_moment);
         e_y = e_y + (s_th * th_dd + c_th * th_d2).scale(inertia.ball_moment);
@@ -272,7 +281,7 @@ pub fn residual<T: Real>(
         let e_theta = (c_th * xdd + s_th * ydd_g).scale(inertia.ball_moment)
             + th_dd.scale(inertia.j_theta)
             + ps.accel.scale(inertia.j_psi_theta);
-        contact = e_theta.re;
+        contact = e_theta.re();
         match mode {
             BallMode::Free => {
                 e_psi = e_psi + e_theta.scale(inertia.orbit_per_tilt);
@@ -286,7 +295,7 @@ pub fn residual<T: Real>(
                 e_psi = e_psi + e_theta;
                 if free_theta_is_unknown {
                     // Ball held on a stop: φ stays an unknown, tied to ψ at acceleration level.
-                    row4 = D5::variable(x.a[4], 4, ch.c_m) - ps.accel;
+                    row4 = A::variable(x.a[4], 4, ch.c_m) - ps.accel;
                 }
             }
         }

@@ -187,7 +187,10 @@ pub struct Rainflow<T, const CAP: usize> {
 }
 
 impl<T: Real, const CAP: usize> Rainflow<T, CAP> {
-    const CHECK: () = assert!(CAP >= 5, "the rainflow residue needs room for at least 5 points");
+    const CHECK: () = assert!(
+        CAP >= 5,
+        "the rainflow residue needs room for at least 5 points"
+    );
 
     /// Counter with hysteresis `gate` (≥ 0, signal units).
     pub fn new(gate: T) -> Result<Self, Error> {
@@ -298,7 +301,12 @@ impl<T: Real, const CAP: usize> Rainflow<T, CAP> {
             }
         }
         let mut prev: Option<T> = None;
-        for &p in pts.get(start..end).unwrap_or(&[]).iter().chain([last].iter()) {
+        for &p in pts
+            .get(start..end)
+            .unwrap_or(&[])
+            .iter()
+            .chain([last].iter())
+        {
             if let Some(q) = prev {
                 sink(Cycle::of(q, p, false));
             }

@@ -149,8 +149,7 @@ fn reaction_moment_at<T: Real, S: Scene, const N: usize, const D: usize>(
     let (u, v, a) = (gather(q, 0), gather(v, 0), gather(a, 0));
     let (axial, _) = b.element.axial_force_and_tangent(&u);
     let g_eff = model.params().gravity + base_accel;
-    let r = b.mass * a + b.stiffness * (u + v * b.damping) + axial
-        - b.element.gravity_force(g_eff);
+    let r = b.mass * a + b.stiffness * (u + v * b.damping) + axial - b.element.gravity_force(g_eff);
     -r.get(3).copied().unwrap_or(T::zero())
 }
 
