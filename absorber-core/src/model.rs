@@ -437,6 +437,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             }
             previous = increment;
         }
+        // A step solve (it has the modified-Newton slot, or is a Newmark solve: c_m = 1 and
+        // c_q > 0) may accept its budget; static and consistent-acceleration solves never do.
+        let step_solve = ch.c_m == T::one() && is_positive(ch.c_q) && !plumb;
+        if self.params.integrator.accept_after_budget && step_solve {
+            return Ok(Solved { x, iterations: max, increment });
+        }
         Err(Error::NoConvergence {
             iterations: max,
             increment: to_f64(increment),

@@ -103,6 +103,11 @@ pub struct Integrator<T> {
     pub max_iterations: u32,
     /// When the Newton matrix is rebuilt.
     pub newton: NewtonKind,
+    /// Fixed Newton budget: after `max_iterations` iterations of a step solve, accept the
+    /// iterate instead of failing with `NoConvergence` (bounded work for firmware that prefers
+    /// a slightly inexact step to a skipped one; the report's `increment` shows how inexact).
+    /// Non-finite values are still errors. Off by default.
+    pub accept_after_budget: bool,
 }
 
 /// Newton variant of the step solve (both converge to the same tolerance).
@@ -186,6 +191,7 @@ impl<T: Real> Default for Params<T> {
                 tolerance: lit(1e-5),
                 max_iterations: 100,
                 newton: NewtonKind::Full,
+                accept_after_budget: false,
             },
             damping: Damping {
                 stiffness_proportional: T::zero(),
