@@ -243,22 +243,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     }
 
     /// Residual `r(q, v, a)` of the equations of motion and its Jacobian along the chain `ch`;
-    /// also the generalized contact force on the ball along θ.
-    pub(crate) fn assemble(
-        &self,
-        q: &SVector<T, D>,
-        v: &SVector<T, D>,
-        a: &SVector<T, D>,
-        g_eff: T,
-        ch: &Chain<T>,
-        contact: Contact,
-    ) -> (SVector<T, D>, SMatrix<T, D, D>, T) {
-        self.assemble_with(q, v, a, g_eff, ch, contact, false)
-    }
-
-    /// [`Model::assemble`], optionally with a free ball pinned plumb (static solve).
+    /// also the generalized contact force on the ball along θ. `plumb` pins a free ball plumb
+    /// (static solve).
     #[allow(clippy::too_many_arguments)]
-    fn assemble_with(
+    pub(crate) fn assemble(
         &self,
         q: &SVector<T, D>,
         v: &SVector<T, D>,
@@ -332,26 +320,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     }
 
     /// Newton–Raphson on `x` with `q = q₀ + c_q x`, `v = v₀ + c_v x`, `a = a₀ + c_m x`, from the
-    /// guess `x`. Convergence: `max_i |c_pos Δx_i| / scale_i ≤ tolerance`.
+    /// guess `x`. Convergence: `max_i |c_pos Δx_i| / scale_i ≤ tolerance`. Optionally with a
+    /// free ball pinned plumb (static solve), and with a slot for modified Newton's factored
+    /// matrix (`None`: full Newton).
     #[allow(clippy::too_many_arguments)]
     fn newton(
-        &self,
-        q0: &SVector<T, D>,
-        v0: &SVector<T, D>,
-        a0: &SVector<T, D>,
-        x: SVector<T, D>,
-        ch: &Chain<T>,
-        c_pos: T,
-        g_eff: T,
-        contact: Contact,
-    ) -> Result<Solved<T, D>, Error> {
-        self.newton_with(q0, v0, a0, x, ch, c_pos, g_eff, contact, false, None)
-    }
-
-    /// [`Model::newton`], optionally with a free ball pinned plumb (static solve), and with a
-    /// slot for modified Newton's factored matrix (`None`: full Newton).
-    #[allow(clippy::too_many_arguments)]
-    fn newton_with(
         &self,
         q0: &SVector<T, D>,
         v0: &SVector<T, D>,
@@ -391,7 +364,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                     .ok_or(Error::Singular)?;
                 (lu.solve(-r).ok_or(Error::Singular)?, false)
             } else {
-                let (r, jac, _) = self.assemble_with(&q, &v, &a, g_eff, ch, contact, plumb);
+                let (r, jac, _) = self.assemble(&q, &v, &a, g_eff, ch, contact, plumb);
                 if !r.iter().all(|z| z.is_finite()) || !jac.iter().all(|z| z.is_finite()) {
                     return Err(Error::NonFiniteState);
                 }
@@ -441,7 +414,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         // c_q > 0) may accept its budget; static and consistent-acceleration solves never do.
         let step_solve = ch.c_m == T::one() && is_positive(ch.c_q) && !plumb;
         if self.params.integrator.accept_after_budget && step_solve {
-            return Ok(Solved { x, iterations: max, increment });
+            return Ok(Solved {
+                x,
+                iterations: max,
+                increment,
+            });
         }
         Err(Error::NoConvergence {
             iterations: max,
@@ -467,7 +444,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         while done < T::one() {
             let target = (done + step).min(T::one());
             let g = self.params.gravity * target;
-            match self.newton_with(&z, &z, &z, q, &ch, T::one(), g, Contact::Off, true, None) {
+            match self.newton(&z, &z, &z, q, &ch, T::one(), g, Contact::Off, true, None) {
                 Ok(s) => {
                     q = s.x;
                     iterations += s.iterations;
@@ -594,6 +571,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             c_pos,
             self.effective_gravity(s.base_accel),
             s.contact,
+            false,
+            None,
         )
     }
 
@@ -621,7 +600,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         };
         let g_eff = self.effective_gravity(base_accel);
         let z = SVector::zeros();
-        let solved = self.newton_with(
+        let solved = self.newton(
             &q_pred, &v_pred, &z, s.a, &ch, ch.c_q, g_eff, s.contact, false, slot,
         )?;
         let a = solved.x;
@@ -872,6 +851,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             self.effective_gravity(s.base_accel),
             &ch,
             contact,
+            false,
         )
         .1
     }
@@ -922,6 +902,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                     self.effective_gravity(s.base_accel),
                     &ch,
                     Contact::Off,
+                    false,
                 )
                 .1
             } else {
@@ -983,7 +964,7 @@ mod tests {
             c_v: 0.7 * 3e-3,
             c_m: 1.0,
         };
-        let (_, jac, _) = m.assemble(&q, &v, &a, 9.0, &ch, contact);
+        let (_, jac, _) = m.assemble(&q, &v, &a, 9.0, &ch, contact, false);
         for j in 0..D {
             let h = 1e-3;
             let mut e = SVector::<f64, D>::zeros();
@@ -996,6 +977,7 @@ mod tests {
                     9.0,
                     &ch,
                     contact,
+                    false,
                 )
                 .0;
             let rm = m
@@ -1006,6 +988,7 @@ mod tests {
                     9.0,
                     &ch,
                     contact,
+                    false,
                 )
                 .0;
             let fd = (rp - rm) / (2.0 * h);

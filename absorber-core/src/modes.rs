@@ -84,6 +84,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 c_m: T::one(),
             },
             Contact::Off,
+            false,
         );
         let (_, k, _) = self.assemble(
             &self.equilibrium,
@@ -96,6 +97,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 c_m: zero,
             },
             Contact::Off,
+            false,
         );
         let half = lit::<T>(0.5);
         ((m + m.transpose()) * half, (k + k.transpose()) * half)

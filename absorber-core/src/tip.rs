@@ -182,16 +182,8 @@ fn psi_kinematics<T: Real, A: Number<T>>(x: &LocalState<T>, ch: &Chain<T>) -> Ps
 
 /// Tip rotation ψ and rate ψ̇ (plain values) from the local state.
 pub fn psi_and_rate<T: Real>(x: &LocalState<T>) -> (T, T) {
-    let z = T::zero();
-    let p: Psi<Plain<T>> = psi_kinematics(
-        x,
-        &Chain {
-            c_q: z,
-            c_v: z,
-            c_m: z,
-        },
-    );
-    (p.psi.0, p.rate.0)
+    let (psi, rate, _) = psi_all(x);
+    (psi, rate)
 }
 
 /// Tip rotation ψ, rate and acceleration (plain values).
