@@ -357,18 +357,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 if !r.iter().all(|z| z.is_finite()) {
                     return Err(Error::NonFiniteState);
                 }
-                let lu = cache
-                    .as_deref()
-                    .and_then(|c| c.as_ref())
-                    .map(|c| c.lu)
-                    .ok_or(Error::Singular)?;
-                (lu.solve(-r).ok_or(Error::Singular)?, false)
+                // Borrow the factors: copying them would cost a D×D memcpy per iteration.
+                let dx = match cache.as_deref() {
+                    Some(Some(c)) => c.lu.solve(-r),
+                    _ => None,
+                };
+                (dx.ok_or(Error::Singular)?, false)
             } else {
                 let (r, jac, _) = self.assemble(&q, &v, &a, g_eff, ch, contact, plumb);
                 if !r.iter().all(|z| z.is_finite()) || !jac.iter().all(|z| z.is_finite()) {
                     return Err(Error::NonFiniteState);
                 }
                 let lu = linalg::factor(jac).ok_or(Error::Singular)?;
+                let dx = lu.solve(-r).ok_or(Error::Singular)?;
                 if let Some(slot) = cache.as_deref_mut() {
                     *slot = Some(CachedJacobian {
                         lu,
@@ -377,7 +378,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                     });
                 }
                 rebuild = false;
-                (lu.solve(-r).ok_or(Error::Singular)?, true)
+                (dx, true)
             };
             if !dx.iter().all(|z| z.is_finite()) {
                 return Err(Error::Singular);
