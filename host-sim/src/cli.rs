@@ -45,6 +45,26 @@ pub enum Command {
     /// Track radius R that puts the ball at half the beam's first frequency (coupled
     /// linearized model), by bisection.
     Tune(TuneArgs),
+    /// Fatigue damage rate at the clamp vs frequency, free vs locked ball (root stress,
+    /// rainflow, AASHTO S–N, Miner): CSV and PNG.
+    Fatigue(crate::fatigue::FatigueArgs),
+    /// Writes docs/validation.md: every quantitative claim of the paper beside this model's
+    /// numbers (3 elements and a converged mesh), with verdicts, reasons and figures.
+    Validation(ValidationArgs),
+}
+
+/// `validation` options.
+#[derive(Args, Debug, Clone)]
+pub struct ValidationArgs {
+    /// Output document.
+    #[arg(long, default_value = "docs/validation.md")]
+    pub out: std::path::PathBuf,
+    /// Directory of its figures (the document links them as `img/...`).
+    #[arg(long, default_value = "docs/img")]
+    pub img: std::path::PathBuf,
+    /// Elements of the converged mesh.
+    #[arg(long, default_value_t = 16)]
+    pub converged: usize,
 }
 
 /// Scene selection and overrides shared by all commands.
@@ -229,6 +249,13 @@ pub fn main(cli: Cli) -> Result<()> {
         Command::Run(a) => run(&a),
         Command::Sweep(a) => sweep_cmd(&a),
         Command::Tune(a) => tune_cmd(&a),
+        Command::Fatigue(a) => crate::fatigue::run(&a),
+        Command::Validation(a) => {
+            let t0 = std::time::Instant::now();
+            crate::validation::write(&a.out, &a.img, a.converged, &|stage| eprintln!("validation: {stage}…"))?;
+            eprintln!("validation: wrote {} in {:.1} s", a.out.display(), t0.elapsed().as_secs_f64());
+            Ok(())
+        }
     }
 }
 
@@ -325,7 +352,12 @@ fn progress_bar(total: u64, what: &str) -> ProgressBar {
 fn summary(rows: &[Row], transient: f64) -> serde_json::Value {
     let end = rows.last().map(|r| r.t).unwrap_or(0.0);
     let strain0 = rows.first().map(|r| r.energies.beam_strain).unwrap_or(0.0);
-    let from = transient.min(end);
+    // A transient as long as the run would leave nothing: then use the second half.
+    let from = if transient < end {
+        transient
+    } else {
+        end / 2.0
+    };
     let max_abs = |f: &dyn Fn(&Row) -> f64, a: f64, b: f64| {
         rows.iter()
             .filter(|r| r.t >= a && r.t <= b)
@@ -353,6 +385,7 @@ fn summary(rows: &[Row], transient: f64) -> serde_json::Value {
     let w = 10.0f64.min(end / 2.0);
     json!({
         "duration": end,
+        "steady_from": from,
         "static_tip_deflection": static_d,
         "tip_amplitude_max": max_abs(&|r: &Row| r.tip_deflection - static_d, 0.0, end),
         "tip_amplitude_steady": half_range(rows, from, |r| r.tip_deflection),
@@ -372,15 +405,16 @@ fn num(v: &serde_json::Value, k: &str) -> f64 {
     v.get(k).and_then(|x| x.as_f64()).unwrap_or(f64::NAN)
 }
 
-fn print_summary(s: &serde_json::Value, transient: f64) {
+fn print_summary(s: &serde_json::Value) {
     let w = num(s, "energy_window");
     println!(
         "static tip deflection      {:.3} mm",
         1e3 * num(s, "static_tip_deflection")
     );
     println!(
-        "tip amplitude              max {:.3} mm; steady (t ≥ {transient} s, half peak-to-peak) {:.3} mm",
+        "tip amplitude              max {:.3} mm; steady (t ≥ {} s, half peak-to-peak) {:.3} mm",
         1e3 * num(s, "tip_amplitude_max"),
+        num(s, "steady_from"),
         1e3 * num(s, "tip_amplitude_steady")
     );
     println!(
@@ -430,7 +464,7 @@ fn paper(a: &PaperArgs) -> Result<()> {
     println!("{}", describe(&s));
     let f: Vec<String> = freqs.iter().take(3).map(|x| format!("{x:.3}")).collect();
     println!("lowest frequencies         {} Hz", f.join(", "));
-    print_summary(&free, transient);
+    print_summary(&free);
     if let Some(l) = &locked {
         println!(
             "locked ball (passive)      tip amplitude max {:.3} mm, steady {:.3} mm",
@@ -476,7 +510,7 @@ fn run(a: &RunArgs) -> Result<()> {
         );
     } else {
         println!("{title}");
-        print_summary(&sum, transient);
+        print_summary(&sum);
         println!("wrote {}", csv.display());
         for p in &pngs {
             println!("wrote {}", p.display());
@@ -487,10 +521,7 @@ fn run(a: &RunArgs) -> Result<()> {
 }
 
 fn sweep_cmd(a: &SweepArgs) -> Result<()> {
-    let mut s = a.scene.load()?;
-    if a.scene.duration.is_none() && a.scene.scene == "paper" {
-        s.file.duration = 60.0;
-    }
+    let s = a.scene.load()?;
     let freqs = a
         .freqs
         .clone()
@@ -528,10 +559,12 @@ fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         render(
             &path,
             &format!(
-                "Frequency response, last {} s of {} s runs ({})",
+                "Frequency response: scene {}, {}, base {} mm; last {} s of {} s",
+                s.file.name,
+                s.file.kind.name(),
+                s.file.excitation.amplitude_or_paper() * 1e3,
                 a.last,
                 s.file.duration,
-                describe(&s)
             ),
             &[
                 Panel::new(
@@ -563,7 +596,7 @@ fn sweep_cmd(a: &SweepArgs) -> Result<()> {
             ],
             2,
             1,
-            (1000, 900),
+            (1100, 900),
         )?;
         png = Some(path);
     }

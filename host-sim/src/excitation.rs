@@ -193,13 +193,13 @@ impl Excitation {
         for k in 1..=n {
             velocity[k] = velocity[k - 1] + 0.5 * step * (accel[k - 1] + accel[k]);
         }
-        let mean_v = velocity.iter().sum::<f64>() / (n + 1) as f64;
+        let mean_v = trapezoid_mean(&velocity);
         velocity.iter_mut().for_each(|v| *v -= mean_v);
         let mut displacement = vec![0.0; n + 1];
         for k in 1..=n {
             displacement[k] = displacement[k - 1] + 0.5 * step * (velocity[k - 1] + velocity[k]);
         }
-        let mean_y = displacement.iter().sum::<f64>() / (n + 1) as f64;
+        let mean_y = trapezoid_mean(&displacement);
         displacement.iter_mut().for_each(|y| *y -= mean_y);
         Ok(Self::Sampled {
             step,
@@ -207,6 +207,15 @@ impl Excitation {
             velocity,
             displacement,
         })
+    }
+}
+
+/// Mean over the record by the trapezoidal rule (exact for whole periods of a sine).
+fn trapezoid_mean(x: &[f64]) -> f64 {
+    match x {
+        [] => 0.0,
+        [a] => *a,
+        [first, .., last] => (x.iter().sum::<f64>() - 0.5 * (first + last)) / (x.len() - 1) as f64,
     }
 }
 

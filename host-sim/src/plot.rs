@@ -188,7 +188,8 @@ pub fn render(
 
 fn format_tick(v: f64) -> String {
     let a = v.abs();
-    if a == 0.0 {
+    // Ticks at zero come out as ±1e-16 from the axis arithmetic.
+    if a < 1e-12 {
         "0".into()
     } else if !(1e-3..1e4).contains(&a) {
         format!("{v:.2e}")

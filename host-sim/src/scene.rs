@@ -25,7 +25,9 @@
 //! [outputs]    # directory, plots = ["time", "fft", "phase", "energy"], transient [s], every
 //! ```
 
-use absorber_core::{BallParams, BeamParams, Damping, ImpactModel, Integrator, Params, TipParams};
+use absorber_core::{
+    BallParams, BeamParams, Damping, ImpactModel, Integrator, NewtonKind, Params, TipParams,
+};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -192,6 +194,20 @@ pub struct IntegratorSection {
     pub tolerance: f64,
     /// Newton iteration budget.
     pub max_iterations: u32,
+    /// Newton variant: `full` (Jacobian every iteration, the paper's) or `modified` (cached).
+    pub newton: NewtonSetting,
+    /// Accept the iterate after `max_iterations` instead of failing the step.
+    pub accept_after_budget: bool,
+}
+
+/// Scene-file spelling of [`absorber_core::NewtonKind`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NewtonSetting {
+    /// Full Newton–Raphson.
+    Full,
+    /// Modified Newton (factored Jacobian kept while it contracts).
+    Modified,
 }
 
 /// Kind of base excitation.
@@ -335,6 +351,11 @@ impl Default for IntegratorSection {
             step: p.step,
             tolerance: p.tolerance,
             max_iterations: p.max_iterations,
+            newton: match p.newton {
+                NewtonKind::Full => NewtonSetting::Full,
+                NewtonKind::Modified => NewtonSetting::Modified,
+            },
+            accept_after_budget: p.accept_after_budget,
         }
     }
 }
@@ -560,12 +581,20 @@ impl Scene {
                     ImpactSetting::Instantaneous => ImpactModel::Instantaneous,
                 },
             },
-            integrator: Integrator {
-                gamma: f.integrator.gamma,
-                beta: f.integrator.beta,
-                step: f.integrator.step,
-                tolerance: f.integrator.tolerance,
-                max_iterations: f.integrator.max_iterations,
+            integrator: {
+                // Field by field, so that core fields without a scene key keep their default.
+                let mut i: Integrator<f64> = Params::<f64>::default().integrator;
+                i.gamma = f.integrator.gamma;
+                i.beta = f.integrator.beta;
+                i.step = f.integrator.step;
+                i.tolerance = f.integrator.tolerance;
+                i.max_iterations = f.integrator.max_iterations;
+                i.newton = match f.integrator.newton {
+                    NewtonSetting::Full => NewtonKind::Full,
+                    NewtonSetting::Modified => NewtonKind::Modified,
+                };
+                i.accept_after_budget = f.integrator.accept_after_budget;
+                i
             },
             damping,
             gravity: f.gravity,
