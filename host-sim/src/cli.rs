@@ -35,9 +35,22 @@ pub enum Command {
     Static(InfoArgs),
     /// Natural frequencies about the static equilibrium [Hz].
     Modes(ModesArgs),
-    /// Time history: CSV (t, base_y, tip_y, tip_deflection, tip_angle, ball_angle,
-    /// ball_rel_angle, energies [J], iterations, impact, rates; documented in the CSV header)
-    /// and PNG plots (time histories, FFT, phase planes, energies: paper Figs. 8–23).
+    /// Time history of a scene: CSV and PNG plots (paper Figs. 8–23).
+    ///
+    /// Writes `<out>/<name>.csv`, one row per step (every n-th with --every), SI units, angles
+    /// in rad, documented in the file's `#` header: t [s]; base_y = y_b [m]; tip_y = y_b +
+    /// deflection, the absolute height of the beam end [m]; tip_deflection, relative to the
+    /// base, static sag included [m]; tip_angle ψ [rad]; ball_angle θ from the downward
+    /// vertical [rad]; ball_rel_angle θ − ψ [rad]; beam_strain, beam_kinetic, beam_potential,
+    /// tip_kinetic, tip_potential, ball_kinetic, ball_potential [J] (kinetic with absolute
+    /// velocities, i.e. with the base velocity; potentials as changes from the static state,
+    /// with the base displacement); iterations (Newton, per step); impact (1 if the ball hit a
+    /// stop); then base_accel [m/s²], tip_velocity [m/s], tip_rate, ball_rate, ball_rel_rate
+    /// [rad/s], ball_spin φ [rad], ball_spin_rate [rad/s]. Base velocity and displacement are
+    /// closed form for a harmonic excitation and integrated (zero mean) for a CSV one.
+    ///
+    /// Plots `<out>/<name>_{time,fft,phase,energy}.png`: time histories, FFT of tip and ball
+    /// after the transient, phase planes (y–ẏ, θ–θ̇, φ–φ̇, θ–ψ), energy curves.
     Run(RunArgs),
     /// Frequency response (paper Fig. 10): one run per frequency in parallel, steady-state
     /// amplitudes of the tip [m] and the ball [deg] over the last part; CSV and PNG.
@@ -79,7 +92,7 @@ pub struct SceneArgs {
     /// Bodies (overrides the scene).
     #[arg(long, value_enum)]
     pub kind: Option<Kind>,
-    /// Beam elements: 1, 2, 3, 4, 6, 8 or 16 (overrides the scene).
+    /// Beam elements: core 1, 2, 3, 4, 6, 8 or 16; full any (overrides the scene).
     #[arg(long)]
     pub elements: Option<usize>,
     /// Scalar (overrides the scene).
@@ -412,7 +425,7 @@ fn print_summary(s: &serde_json::Value) {
         1e3 * num(s, "static_tip_deflection")
     );
     println!(
-        "tip amplitude              max {:.3} mm; steady (t ≥ {} s, half peak-to-peak) {:.3} mm",
+        "tip amplitude              max {:.3} mm; steady (t ≥ {:.1} s, half peak-to-peak) {:.3} mm",
         1e3 * num(s, "tip_amplitude_max"),
         num(s, "steady_from"),
         1e3 * num(s, "tip_amplitude_steady")
