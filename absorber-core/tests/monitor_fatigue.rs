@@ -15,7 +15,8 @@ fn sine<T: absorber_core::Real>(
     let mut miner = Miner::<T>::new(cat.curve(rule)).unwrap();
     for k in 0..=periods * 40 {
         let x = 60e6 - 0.5 * range * (2.0 * std::f64::consts::PI * k as f64 / 40.0).cos();
-        rf.push(nalgebra::convert(x), &mut |c| miner.add(&c)).unwrap();
+        rf.push(nalgebra::convert(x), &mut |c| miner.add(&c))
+            .unwrap();
     }
     (miner.with_residue(&rf), rf.overflows())
 }
@@ -67,7 +68,12 @@ fn f32_damage_accumulates_a_million_small_cycles() {
     let (m32, _) = sine::<f32>(30e6, 20_000, ThresholdRule::Cutoff, cat);
     let (m64, _) = sine::<f64>(30e6, 20_000, ThresholdRule::Cutoff, cat);
     let rel = (m32.damage() as f64 - m64.damage()).abs() / m64.damage();
-    assert!(rel < 1e-5, "f32 {} vs f64 {} ({rel:e})", m32.damage(), m64.damage());
+    assert!(
+        rel < 1e-5,
+        "f32 {} vs f64 {} ({rel:e})",
+        m32.damage(),
+        m64.damage()
+    );
     let mut m = Miner::<f32>::new(cat.curve(ThresholdRule::Extended)).unwrap();
     let c = absorber_core::monitor::Cycle {
         range: 1.0e6f32,
@@ -77,7 +83,10 @@ fn f32_damage_accumulates_a_million_small_cycles() {
     for _ in 0..1_000_000 {
         m.add(&c);
     }
-    let expected = 1e6 * cat.curve::<f64>(ThresholdRule::Extended).damage_per_cycle(1.0e6);
+    let expected = 1e6
+        * cat
+            .curve::<f64>(ThresholdRule::Extended)
+            .damage_per_cycle(1.0e6);
     let rel = (m.damage() as f64 - expected).abs() / expected;
     assert!(rel < 1e-5, "{} vs {expected} ({rel:e})", m.damage());
 }
@@ -99,8 +108,16 @@ fn aashto_presets_match_the_si_table() {
     for (cat, a_si, th_si) in si {
         let c = cat.curve::<f64>(ThresholdRule::Cutoff);
         let a_mpa3 = REFERENCE_CYCLES * (c.reference_range / 1e6).powi(3);
-        assert!((a_mpa3 / 1e11 / a_si - 1.0).abs() < 5e-3, "{}: A", cat.name());
-        assert!((c.threshold / 1e6 / th_si - 1.0).abs() < 5e-3, "{}: CAFT", cat.name());
+        assert!(
+            (a_mpa3 / 1e11 / a_si - 1.0).abs() < 5e-3,
+            "{}: A",
+            cat.name()
+        );
+        assert!(
+            (c.threshold / 1e6 / th_si - 1.0).abs() < 5e-3,
+            "{}: CAFT",
+            cat.name()
+        );
         assert_eq!(c.slope, 3.0);
     }
     assert!(Miner::<f64>::new(absorber_core::monitor::SnCurve {

@@ -18,7 +18,8 @@ fn accel(f: f64, k: usize) -> f64 {
 fn monitor_memory_is_a_compile_time_constant() {
     type Plain = Monitor<f32>; // CAP = 128, K = 16, W = 256
     type Twinned = Monitor<f32, LockedBallModel<f32, 3, 12>>;
-    let parts = 128 * size_of::<f32>() + 16 * size_of::<Impact<f32>>() + 256 * size_of::<Block<f32, ()>>();
+    let parts =
+        128 * size_of::<f32>() + 16 * size_of::<Impact<f32>>() + 256 * size_of::<Block<f32, ()>>();
     let plain = size_of::<Plain>();
     let twinned = size_of::<Twinned>();
     println!(
@@ -31,7 +32,10 @@ fn monitor_memory_is_a_compile_time_constant() {
         size_of::<LockedBallModel<f32, 3, 12>>(),
         size_of::<Monitor<f64>>(),
     );
-    assert!(plain >= parts && plain <= parts + 512, "{plain} vs {parts} + 512");
+    assert!(
+        plain >= parts && plain <= parts + 512,
+        "{plain} vs {parts} + 512"
+    );
     assert_eq!(size_of::<NoTwin>(), 0);
     assert_eq!(
         twinned - plain,

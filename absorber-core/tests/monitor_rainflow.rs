@@ -13,7 +13,10 @@ fn count<const CAP: usize>(series: &[f64], gate: f64) -> (Vec<(f64, f64)>, Rainf
         rf.push(x, &mut add).unwrap();
     }
     rf.residue(&mut add);
-    let out = agg.into_iter().map(|(b, n)| (f64::from_bits(b), n)).collect();
+    let out = agg
+        .into_iter()
+        .map(|(b, n)| (f64::from_bits(b), n))
+        .collect();
     (out, rf)
 }
 
@@ -53,7 +56,10 @@ struct Vectors {
 fn load_vectors() -> Vec<Vectors> {
     let text = include_str!("data/rainflow_vectors.csv");
     let mut out: Vec<Vectors> = Vec::new();
-    for line in text.lines().filter(|l| !l.starts_with('#') && !l.is_empty()) {
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.is_empty())
+    {
         let mut f = line.split(',');
         let kind = f.next().unwrap();
         let name = f.next().unwrap().to_string();
@@ -86,7 +92,12 @@ fn counts_equal_the_python_rainflow_package_exactly_on_random_sequences() {
         assert_eq!(v.series.len(), 2000);
         let (got, rf) = count::<512>(&v.series, 0.0);
         assert_eq!(rf.overflows(), 0, "{}", v.name);
-        assert_eq!(got.len(), v.counts.len(), "{}: number of distinct ranges", v.name);
+        assert_eq!(
+            got.len(),
+            v.counts.len(),
+            "{}: number of distinct ranges",
+            v.name
+        );
         for (g, e) in got.iter().zip(&v.counts) {
             assert_eq!(g, e, "{}", v.name);
         }
@@ -169,7 +180,10 @@ fn residue_overflow_is_counted_conservatively() {
                 rule: ThresholdRule::Extended,
             };
             let damage = |pairs: &[(f64, f64)]| -> f64 {
-                pairs.iter().map(|(r, n)| n * curve.damage_per_cycle(*r)).sum()
+                pairs
+                    .iter()
+                    .map(|(r, n)| n * curve.damage_per_cycle(*r))
+                    .sum()
             };
             let (small, rf) = count::<6>(&series, 0.0);
             let (big, rf_big) = count::<4096>(&series, 0.0);
@@ -179,11 +193,17 @@ fn residue_overflow_is_counted_conservatively() {
                 assert_eq!(small, big);
             } else {
                 overflowed += 1;
-                assert!(ds >= db * (1.0 - 1e-12), "trial {trial}, m = {m}: {ds} < {db}");
+                assert!(
+                    ds >= db * (1.0 - 1e-12),
+                    "trial {trial}, m = {m}: {ds} < {db}"
+                );
             }
         }
     }
-    assert!(overflowed > 100, "the test must exercise the overflow ({overflowed})");
+    assert!(
+        overflowed > 100,
+        "the test must exercise the overflow ({overflowed})"
+    );
 }
 
 /// The hysteresis gate ignores reversals of at most `gate`: 0, 10, 9.5, 10.2, 0 with a gate of 1

@@ -49,7 +49,10 @@ fn check<const N: usize, const D: usize>() -> (f64, f64, f64) {
         "N = {N}: clamp reaction {reaction:.6} N·m (rel. {:+.3e})",
         (reaction - exact) / exact.abs()
     );
-    assert!((reaction - exact).abs() <= 1e-6 * exact.abs(), "reaction moment {reaction} vs {exact}");
+    assert!(
+        (reaction - exact).abs() <= 1e-6 * exact.abs(),
+        "reaction moment {reaction} vs {exact}"
+    );
     println!(
         "N = {N}: EI·κ = {fe:.6} N·m, exact statics {exact:.6} N·m (rel. {:+.3e}), \
          μ g l²/12 = {fixed_end:.3e} N·m, after adding it {:+.3e}; linear formula {simple:.6} ({:+.3e})",
@@ -74,8 +77,14 @@ fn static_root_moment_matches_exact_statics() {
     let (fe3, ex3, _) = check::<3, 13>();
     let (fe8, ex8, _) = check::<8, 33>();
     assert!(fe3 < 0.0 && fe8 < 0.0, "hogging at the clamp");
-    assert!((fe3 - ex3).abs() <= 0.07 * ex3.abs(), "N = 3: {fe3} vs {ex3}");
-    assert!((fe8 - ex8).abs() <= 0.0025 * ex8.abs(), "N = 8: {fe8} vs {ex8}");
+    assert!(
+        (fe3 - ex3).abs() <= 0.07 * ex3.abs(),
+        "N = 3: {fe3} vs {ex3}"
+    );
+    assert!(
+        (fe8 - ex8).abs() <= 0.0025 * ex8.abs(),
+        "N = 8: {fe8} vs {ex8}"
+    );
     let ratio = (fe3 - ex3).abs() / (fe8 - ex8).abs();
     assert!(ratio > 7.1, "error ratio N=3/N=8 = {ratio}");
 }
