@@ -3,7 +3,6 @@ pub use absorber_core;
 pub mod full;
 pub mod sim;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
-pub mod accuracy;
 pub mod cli;
 pub mod core_sim;
 pub mod excitation;
@@ -13,7 +12,5 @@ pub mod figures;
 pub mod plot;
 pub mod run;
 pub mod scene;
-pub mod stability;
 pub mod sweep;
 pub mod tune;
-pub mod validation;
