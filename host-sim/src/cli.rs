@@ -61,9 +61,6 @@ pub enum Command {
     /// Fatigue damage rate at the clamp vs frequency, free vs locked ball (root stress,
     /// rainflow, AASHTO S–N, Miner): CSV and PNG.
     Fatigue(crate::fatigue::FatigueArgs),
-    /// Fatigue damage rate at the clamp vs frequency, free vs locked ball (root stress,
-    /// rainflow, AASHTO S–N, Miner): CSV and PNG.
-    Fatigue(crate::fatigue::FatigueArgs),
     /// Writes docs/validation.md: every quantitative claim of the paper beside this model's
     /// numbers (3 elements and a converged mesh), with verdicts, reasons and figures.
     Validation(ValidationArgs),
@@ -265,7 +262,6 @@ pub fn main(cli: Cli) -> Result<()> {
         Command::Run(a) => run(&a),
         Command::Sweep(a) => sweep_cmd(&a),
         Command::Tune(a) => tune_cmd(&a),
-        Command::Fatigue(a) => crate::fatigue::run(&a),
         Command::Fatigue(a) => crate::fatigue::run(&a),
         Command::Validation(a) => {
             let t0 = std::time::Instant::now();
