@@ -14,3 +14,4 @@ pub mod run;
 pub mod scene;
 pub mod sweep;
 pub mod tune;
+pub mod validation;
