@@ -85,11 +85,16 @@ pub fn shape_xx<T: Real>(l: T, xi: T) -> [T; 4] {
 }
 
 /// `Σ_k w_k · (u_{2k}, u_{2k+1})`: applies a scalar shape row to the element vector.
+/// (Exact-size chunks and slice patterns: no index assertion survives into firmware at any
+/// optimization level.)
 #[inline]
 fn apply<T: Real>(w: &[T; 4], u: &ElementVector<T>) -> Vector2<T> {
     let mut r = Vector2::zeros();
-    for (k, wk) in w.iter().enumerate() {
-        r += u.fixed_rows::<2>(2 * k) * *wk;
+    for (pair, wk) in u.as_slice().chunks_exact(2).zip(w.iter()) {
+        if let [x, y] = pair {
+            r.x += *x * *wk;
+            r.y += *y * *wk;
+        }
     }
     r
 }
@@ -198,9 +203,11 @@ impl<T: Real> Element<T> {
         let eps = d.x + lit::<T>(0.5) * d.norm_squared();
         let (r1, r2) = (T::one() + d.x, d.y); // r′ = (1 + d₁, d₂)
         let mut g = ElementVector::zeros();
-        for (k, s) in sx.iter().enumerate() {
-            g[2 * k] = *s * r1;
-            g[2 * k + 1] = *s * r2;
+        for (pair, s) in g.as_mut_slice().chunks_exact_mut(2).zip(sx.iter()) {
+            if let [gx, gy] = pair {
+                *gx = *s * r1;
+                *gy = *s * r2;
+            }
         }
         (sx, eps, g)
     }

@@ -77,16 +77,16 @@ impl<T: Real> Beam<T> {
                 let Some(gi) = global_index(k, i) else {
                     continue;
                 };
-                if let Some(dst) = r.get_mut(gi) {
-                    *dst += re[i];
+                if let (Some(dst), Some(src)) = (r.get_mut(gi), re.get(i)) {
+                    *dst += *src;
                 }
                 if let (Some(jac), Some(je)) = (jac.as_deref_mut(), je.as_ref()) {
                     for j in 0..8 {
                         let Some(gj) = global_index(k, j) else {
                             continue;
                         };
-                        if let Some(dst) = jac.get_mut((gi, gj)) {
-                            *dst += je[(i, j)];
+                        if let (Some(dst), Some(src)) = (jac.get_mut((gi, gj)), je.get((i, j))) {
+                            *dst += *src;
                         }
                     }
                 }
