@@ -47,6 +47,13 @@ fn core_step(c: &mut Criterion) {
     bench_scene::<f64, FreeBall, 4, 17>(c, "f64", 3.70, 2.0);
     bench_scene::<f64, FreeBall, 6, 25>(c, "f64", 3.70, 2.0);
     bench_scene::<f64, FreeBall, 8, 33>(c, "f64", 3.70, 2.0);
+    // f32 across N (the firmware's scalar), and the locked and beam scenes at N = 6.
+    bench_scene::<f32, FreeBall, 1, 5>(c, "f32", 3.70, 2.0);
+    bench_scene::<f32, FreeBall, 2, 9>(c, "f32", 3.70, 2.0);
+    bench_scene::<f32, FreeBall, 4, 17>(c, "f32", 3.70, 2.0);
+    bench_scene::<f32, FreeBall, 6, 25>(c, "f32", 3.70, 2.0);
+    bench_scene::<f32, LockedBall, 6, 24>(c, "f32", 3.70, 2.0);
+    bench_scene::<f32, BeamOnly, 6, 24>(c, "f32", 3.70, 2.0);
 }
 
 criterion_group! {

@@ -61,6 +61,9 @@ pub enum Command {
     /// Fatigue damage rate at the clamp vs frequency, free vs locked ball (root stress,
     /// rainflow, AASHTO S–N, Miner): CSV and PNG.
     Fatigue(crate::fatigue::FatigueArgs),
+    /// Writes docs/accuracy.md: error of embedded configurations (elements, step, precision,
+    /// Newton budget) against a converged full-solver reference, and their run time.
+    Accuracy(crate::accuracy::AccuracyArgs),
     /// Writes docs/validation.md: every quantitative claim of the paper beside this model's
     /// numbers (3 elements and a converged mesh), with verdicts, reasons and figures.
     Validation(ValidationArgs),
@@ -263,6 +266,7 @@ pub fn main(cli: Cli) -> Result<()> {
         Command::Sweep(a) => sweep_cmd(&a),
         Command::Tune(a) => tune_cmd(&a),
         Command::Fatigue(a) => crate::fatigue::run(&a),
+        Command::Accuracy(a) => crate::accuracy::run(&a),
         Command::Validation(a) => {
             let t0 = std::time::Instant::now();
             crate::validation::write(&a.out, &a.img, a.converged, &|stage| eprintln!("validation: {stage}…"))?;

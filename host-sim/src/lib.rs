@@ -3,6 +3,7 @@ pub use absorber_core;
 pub mod full;
 pub mod sim;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
+pub mod accuracy;
 pub mod cli;
 pub mod core_sim;
 pub mod excitation;

@@ -1,0 +1,41 @@
+//! Host time of one step of the full solver (maximal coordinates, `f64`) against the number of
+//! elements: it should grow about linearly in N (banded augmented system, banded reduced Newton
+//! matrix). Locked ball (no stop events), paper integrator (h = 3 ms), 0.5 mm at 3.70 Hz, after
+//! 1 s of warm-up.
+
+use absorber_core::Params;
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use host_sim::full::{FullSolver, SceneKind};
+use std::hint::black_box;
+
+fn accel(k: u64) -> f64 {
+    let w = 2.0 * std::f64::consts::PI * 3.70;
+    -0.5e-3 * w * w * (w * k as f64 * 0.003).sin()
+}
+
+fn full_step(c: &mut Criterion) {
+    let mut g = c.benchmark_group("full_step/locked");
+    for n in [2usize, 4, 8, 16, 32, 64] {
+        let mut s = FullSolver::at_rest(Params::default(), SceneKind::LockedBall, n, 0.0)
+            .expect("paper scene");
+        let mut k = 0u64;
+        while (k as f64) * 0.003 < 1.0 {
+            k += 1;
+            s.step(accel(k)).expect("warm-up");
+        }
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                k += 1;
+                black_box(s.step(accel(k)).map(|r| r.iterations).unwrap_or(u32::MAX))
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(10).measurement_time(std::time::Duration::from_secs(3)).warm_up_time(std::time::Duration::from_millis(500));
+    targets = full_step
+}
+criterion_main!(benches);
