@@ -58,6 +58,9 @@ pub enum Command {
     /// Track radius R that puts the ball at half the beam's first frequency (coupled
     /// linearized model), by bisection.
     Tune(TuneArgs),
+    /// Numerical stability matrix (stiff and extreme cases, bad input, f32/f64 drift);
+    /// writes docs/stability.md.
+    Stability(crate::stability::StabilityArgs),
     /// Fatigue damage rate at the clamp vs frequency, free vs locked ball (root stress,
     /// rainflow, AASHTO S–N, Miner): CSV and PNG.
     Fatigue(crate::fatigue::FatigueArgs),
@@ -265,6 +268,7 @@ pub fn main(cli: Cli) -> Result<()> {
         Command::Run(a) => run(&a),
         Command::Sweep(a) => sweep_cmd(&a),
         Command::Tune(a) => tune_cmd(&a),
+        Command::Stability(a) => crate::stability::command(&a),
         Command::Fatigue(a) => crate::fatigue::run(&a),
         Command::Accuracy(a) => crate::accuracy::run(&a),
         Command::Validation(a) => {

@@ -13,6 +13,7 @@ pub mod figures;
 pub mod plot;
 pub mod run;
 pub mod scene;
+pub mod stability;
 pub mod sweep;
 pub mod tune;
 pub mod validation;
