@@ -39,7 +39,7 @@ cargo build -q -p absorber-firmware --target "$target" --profile fw --config fir
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail=0
-for scene in free beam locked empty; do
+for scene in free free-modified beam locked empty; do
     "$tdir/release/fw-$scene" >"$out/$scene.host"
     hash=$(sed -n 's/^state_hash=//p' "$out/$scene.host")
     set +e

@@ -32,7 +32,7 @@ qemu() {
 }
 
 for profile in fw fw-size; do
-    for scene in free beam locked empty; do
+    for scene in free free-modified beam locked empty; do
         elf=$tdir/$target/$profile/fw-$scene
         stem=$work/$profile-$scene
         "$tdir/release/fw-$scene" >"$stem.host"

@@ -109,6 +109,47 @@ impl<S: Scene, const N: usize, const D: usize> Sim for Model<f32, S, N, D> {
     }
 }
 
+/// The same model stepped with modified Newton (`NewtonKind::Modified`: the factored Newton
+/// matrix is kept across iterations and steps), otherwise `Params::default()`.
+pub struct ModifiedNewton<M>(pub M);
+
+impl<S: Scene, const N: usize, const D: usize> Sim for ModifiedNewton<Model<f32, S, N, D>> {
+    fn name() -> &'static str {
+        "modified Newton"
+    }
+
+    fn init() -> Result<Self, Error> {
+        let mut p = Params::default();
+        p.integrator.newton = absorber_core::NewtonKind::Modified;
+        Model::at_rest(p, 0.0).map(ModifiedNewton)
+    }
+
+    #[inline(never)]
+    fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
+        Model::step(&mut self.0, base_accel)
+    }
+
+    fn h(&self) -> f32 {
+        self.0.h()
+    }
+
+    fn tip(&self) -> f32 {
+        self.0.tip()
+    }
+
+    fn ball(&self) -> f32 {
+        self.0.ball()
+    }
+
+    fn static_tip(&self) -> f32 {
+        self.0.static_tip()
+    }
+
+    fn state_words(&self, f: &mut dyn FnMut(u32)) {
+        self.0.state_words(f)
+    }
+}
+
 /// No model at all: the same driver, printing and hashing, for the flash/RAM baseline.
 pub struct Empty {
     last: f32,
