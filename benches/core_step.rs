@@ -15,22 +15,41 @@ fn excitation<T: Real>(freq: f64, k: u64) -> T {
     nalgebra::convert(-0.5e-3 * w * w * (w * t).sin())
 }
 
-fn bench_scene<T: Real, S: Scene, const N: usize, const D: usize>(c: &mut Criterion, precision: &str, freq: f64, warm: f64) {
-    let mut model = Model::<T, S, N, D>::at_rest(Params::default(), T::zero()).expect("paper scene");
+fn bench_scene<T: Real, S: Scene, const N: usize, const D: usize>(
+    c: &mut Criterion,
+    precision: &str,
+    freq: f64,
+    warm: f64,
+) {
+    let mut model =
+        Model::<T, S, N, D>::at_rest(Params::default(), T::zero()).expect("paper scene");
     let mut k = 0u64;
     while (k as f64) * 0.003 < warm {
         k += 1;
         model.step(excitation(freq, k)).expect("warm-up");
     }
-    let name = if freq == 3.70 { S::NAME.to_string() } else { format!("{}-{freq}Hz", S::NAME) };
-    c.bench_with_input(BenchmarkId::new(format!("core_step/{name}/{precision}"), N), &N, |b, _| {
-        b.iter(|| {
-            k += 1;
-            // A failed step would keep the state; the benchmark then measures failures, so
-            // count them in the result instead of hiding them.
-            black_box(model.step(excitation(freq, k)).map(|r| r.iterations).unwrap_or(u32::MAX))
-        })
-    });
+    let name = if freq == 3.70 {
+        S::NAME.to_string()
+    } else {
+        format!("{}-{freq}Hz", S::NAME)
+    };
+    c.bench_with_input(
+        BenchmarkId::new(format!("core_step/{name}/{precision}"), N),
+        &N,
+        |b, _| {
+            b.iter(|| {
+                k += 1;
+                // A failed step would keep the state; the benchmark then measures failures, so
+                // count them in the result instead of hiding them.
+                black_box(
+                    model
+                        .step(excitation(freq, k))
+                        .map(|r| r.iterations)
+                        .unwrap_or(u32::MAX),
+                )
+            })
+        },
+    );
 }
 
 fn core_step(c: &mut Criterion) {

@@ -47,7 +47,13 @@ fn compare(freq: f64, seconds: f64) -> Comparison {
             separation = Some(t);
         }
     }
-    Comparison { worst, worst_before_impact, first_impact, amplitude: amp, separation }
+    Comparison {
+        worst,
+        worst_before_impact,
+        first_impact,
+        amplitude: amp,
+        separation,
+    }
 }
 
 /// 3.70 Hz (before the autoparametric range: the ball barely moves, no impacts), 20 s: the two
@@ -57,7 +63,10 @@ fn compare(freq: f64, seconds: f64) -> Comparison {
 #[test]
 fn f32_and_f64_agree_within_newton_tolerance_at_3_70_hz_over_20_s() {
     let c = compare(3.70, 20.0);
-    println!("3.70 Hz: worst {:.3e} m, amplitude {:.3e} m", c.worst, c.amplitude);
+    println!(
+        "3.70 Hz: worst {:.3e} m, amplitude {:.3e} m",
+        c.worst, c.amplitude
+    );
     assert!(c.first_impact.is_none());
     assert!(c.worst < 1e-5 * 0.365);
     assert!(c.separation.is_none());
@@ -75,7 +84,9 @@ fn f32_and_f64_agree_at_4_13_hz_until_the_chaotic_motion_separates_them() {
         "4.13 Hz: first impact {:?} s, worst before it {:.3e} m, separation {:?} s, amplitude {:.3e} m",
         c.first_impact, c.worst_before_impact, c.separation, c.amplitude
     );
-    let first = c.first_impact.expect("the ball reaches the stops at 4.13 Hz");
+    let first = c
+        .first_impact
+        .expect("the ball reaches the stops at 4.13 Hz");
     assert!(c.worst_before_impact < 1e-5 * 0.365);
     assert!(c.separation.is_none_or(|t| t > first + 1.0));
 }
