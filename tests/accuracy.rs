@@ -12,8 +12,8 @@
 //! prints the measured values.
 
 use host_sim::accuracy::{
-    compare, embedded_f1, full_f1, peak_dynamic, reference_config, run_embedded, run_full,
-    scenes, Config, Errors, TestScene, Trajectory,
+    compare, embedded_f1, full_f1, peak_dynamic, reference_config, run_embedded, run_full, scenes,
+    Config, Errors, TestScene, Trajectory,
 };
 
 fn scene(name: &str) -> TestScene {
@@ -65,7 +65,9 @@ fn default_first_frequency_error() {
     let f64_ = embedded_f1(&Config::DEFAULT.with(|c| c.f32 = false)).expect("f64");
     let e32 = 100.0 * (f32_ / f_ref - 1.0);
     let e64 = 100.0 * (f64_ / f_ref - 1.0);
-    println!("f1: ref {f_ref:.5} Hz, f32 {f32_:.5} Hz ({e32:+.3} %), f64 {f64_:.5} Hz ({e64:+.3} %)");
+    println!(
+        "f1: ref {f_ref:.5} Hz, f32 {f32_:.5} Hz ({e32:+.3} %), f64 {f64_:.5} Hz ({e64:+.3} %)"
+    );
     within("f1 error f32 [%]", e32.abs(), 0.95);
     within("f1 error f64 [%]", e64.abs(), 0.95);
 }
@@ -91,10 +93,26 @@ fn default_locked_4_13_first_5_s() {
 fn default_free_3_70_first_5_s() {
     let (r, e32, e64) = measure("free-3.70", 5.0);
     let p = peak_dynamic(&r);
-    within("RMS tip error f32 [%]", 100.0 * e32.tip_rms / p, RMS_FREE_370);
-    within("RMS tip error f64 [%]", 100.0 * e64.tip_rms / p, RMS_FREE_370);
-    within("max tip error f32 [%]", 100.0 * e32.tip_max / p, MAX_FREE_370);
-    within("max tip error f64 [%]", 100.0 * e64.tip_max / p, MAX_FREE_370);
+    within(
+        "RMS tip error f32 [%]",
+        100.0 * e32.tip_rms / p,
+        RMS_FREE_370,
+    );
+    within(
+        "RMS tip error f64 [%]",
+        100.0 * e64.tip_rms / p,
+        RMS_FREE_370,
+    );
+    within(
+        "max tip error f32 [%]",
+        100.0 * e32.tip_max / p,
+        MAX_FREE_370,
+    );
+    within(
+        "max tip error f64 [%]",
+        100.0 * e64.tip_max / p,
+        MAX_FREE_370,
+    );
     within("max θ error f32 [mrad]", 1e3 * e32.ball_max, BALL_FREE_370);
     within("max θ error f64 [mrad]", 1e3 * e64.ball_max, BALL_FREE_370);
 }
@@ -104,12 +122,31 @@ fn default_free_3_70_first_5_s() {
 #[test]
 fn default_free_4_13_before_the_first_impact() {
     let (r, e32, e64) = measure("free-4.13", 2.9);
-    assert!(r.impacts.is_empty(), "the reference hit a stop before 2.9 s");
+    assert!(
+        r.impacts.is_empty(),
+        "the reference hit a stop before 2.9 s"
+    );
     let p = peak_dynamic(&r);
-    within("RMS tip error f32 [%]", 100.0 * e32.tip_rms / p, RMS_FREE_413);
-    within("RMS tip error f64 [%]", 100.0 * e64.tip_rms / p, RMS_FREE_413);
-    within("max tip error f32 [%]", 100.0 * e32.tip_max / p, MAX_FREE_413);
-    within("max tip error f64 [%]", 100.0 * e64.tip_max / p, MAX_FREE_413);
+    within(
+        "RMS tip error f32 [%]",
+        100.0 * e32.tip_rms / p,
+        RMS_FREE_413,
+    );
+    within(
+        "RMS tip error f64 [%]",
+        100.0 * e64.tip_rms / p,
+        RMS_FREE_413,
+    );
+    within(
+        "max tip error f32 [%]",
+        100.0 * e32.tip_max / p,
+        MAX_FREE_413,
+    );
+    within(
+        "max tip error f64 [%]",
+        100.0 * e64.tip_max / p,
+        MAX_FREE_413,
+    );
     within("max θ error f32 [mrad]", 1e3 * e32.ball_max, BALL_FREE_413);
     within("max θ error f64 [mrad]", 1e3 * e64.ball_max, BALL_FREE_413);
 }

@@ -273,8 +273,14 @@ pub fn main(cli: Cli) -> Result<()> {
         Command::Accuracy(a) => crate::accuracy::run(&a),
         Command::Validation(a) => {
             let t0 = std::time::Instant::now();
-            crate::validation::write(&a.out, &a.img, a.converged, &|stage| eprintln!("validation: {stage}…"))?;
-            eprintln!("validation: wrote {} in {:.1} s", a.out.display(), t0.elapsed().as_secs_f64());
+            crate::validation::write(&a.out, &a.img, a.converged, &|stage| {
+                eprintln!("validation: {stage}…")
+            })?;
+            eprintln!(
+                "validation: wrote {} in {:.1} s",
+                a.out.display(),
+                t0.elapsed().as_secs_f64()
+            );
             Ok(())
         }
     }

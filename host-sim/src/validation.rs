@@ -30,32 +30,54 @@ fn scene(kind: Kind, n: usize, frequency: f64, duration: f64) -> Scene {
 
 /// Largest value of `x` over rows with `from ≤ t < to`.
 fn max_in(rows: &[Row], from: f64, to: f64, x: impl Fn(&Row) -> f64) -> f64 {
-    rows.iter().filter(|r| r.t >= from && r.t < to).map(x).fold(f64::NEG_INFINITY, f64::max)
+    rows.iter()
+        .filter(|r| r.t >= from && r.t < to)
+        .map(x)
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// Mean of `x` over rows with `from ≤ t < to`.
 fn mean_in(rows: &[Row], from: f64, to: f64, x: impl Fn(&Row) -> f64) -> f64 {
-    let v: Vec<f64> = rows.iter().filter(|r| r.t >= from && r.t < to).map(x).collect();
+    let v: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.t >= from && r.t < to)
+        .map(x)
+        .collect();
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
 /// Beating of the ball angle after `from` seconds: the period of its envelope (mean time
 /// between the envelope's upward crossings of its mean), from the peaks of |α|.
 fn beat_period(rows: &[Row], from: f64) -> Option<f64> {
-    let a: Vec<(f64, f64)> = rows.iter().filter(|r| r.t >= from).map(|r| (r.t, r.ball_rel_angle.abs())).collect();
-    let peaks: Vec<(f64, f64)> =
-        a.windows(3).filter(|w| w[1].1 > w[0].1 && w[1].1 >= w[2].1).map(|w| w[1]).collect();
+    let a: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r.t >= from)
+        .map(|r| (r.t, r.ball_rel_angle.abs()))
+        .collect();
+    let peaks: Vec<(f64, f64)> = a
+        .windows(3)
+        .filter(|w| w[1].1 > w[0].1 && w[1].1 >= w[2].1)
+        .map(|w| w[1])
+        .collect();
     if peaks.len() < 8 {
         return None;
     }
     let mean = peaks.iter().map(|p| p.1).sum::<f64>() / peaks.len() as f64;
-    let ups: Vec<f64> = peaks.windows(2).filter(|w| w[0].1 < mean && w[1].1 >= mean).map(|w| w[1].0).collect();
+    let ups: Vec<f64> = peaks
+        .windows(2)
+        .filter(|w| w[0].1 < mean && w[1].1 >= mean)
+        .map(|w| w[1].0)
+        .collect();
     (ups.len() >= 3).then(|| (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64)
 }
 
 /// The two strongest spectral peaks of the ball angle between 1.5 and 3 Hz after `from`.
 fn ball_peaks(rows: &[Row], from: f64, h: f64) -> (f64, f64) {
-    let x: Vec<f64> = rows.iter().filter(|r| r.t >= from).map(|r| r.ball_rel_angle).collect();
+    let x: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.t >= from)
+        .map(|r| r.ball_rel_angle)
+        .collect();
     let s = fft::spectrum(&x, h);
     let mut bins: Vec<(f64, f64)> = s
         .frequency
@@ -67,13 +89,19 @@ fn ball_peaks(rows: &[Row], from: f64, h: f64) -> (f64, f64) {
     bins.sort_by(|a, b| b.1.total_cmp(&a.1));
     let first = bins.first().map_or(f64::NAN, |b| b.0);
     // The second peak: the strongest bin at least 0.1 Hz away from the first.
-    let second = bins.iter().find(|b| (b.0 - first).abs() > 0.1).map_or(f64::NAN, |b| b.0);
+    let second = bins
+        .iter()
+        .find(|b| (b.0 - first).abs() > 0.1)
+        .map_or(f64::NAN, |b| b.0);
     (first.max(second), first.min(second))
 }
 
 /// Lowest sweep frequency at which the ball's steady amplitude exceeds 10°.
 fn onset(points: &[SweepPoint]) -> Option<f64> {
-    points.iter().find(|p| p.ball_amplitude_deg > 10.0).map(|p| p.frequency)
+    points
+        .iter()
+        .find(|p| p.ball_amplitude_deg > 10.0)
+        .map(|p| p.frequency)
 }
 
 /// One row of the claims table.
@@ -87,7 +115,12 @@ struct Claim {
 }
 
 /// Runs everything and writes `doc` with its figures in `img` (named relative to the doc).
-pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) + Sync)) -> Result<()> {
+pub fn write(
+    doc: &Path,
+    img: &Path,
+    converged: usize,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<()> {
     std::fs::create_dir_all(img).with_context(|| format!("cannot create `{}`", img.display()))?;
     let h = Scene::paper().file.integrator.step;
     let mut claims = Vec::new();
@@ -97,7 +130,11 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
         let free = crate::run::build_simulator(&scene(Kind::Free, n, 4.13, 1.0), 0.0)?;
         let locked = crate::run::build_simulator(&scene(Kind::Locked, n, 4.13, 1.0), 0.0)?;
         let f = free.natural_frequencies()?;
-        Ok((free.static_tip_deflection(), locked.natural_frequencies()?[0], f[0]))
+        Ok((
+            free.static_tip_deflection(),
+            locked.natural_frequencies()?[0],
+            f[0],
+        ))
     };
     let (s3, f3, b3) = statics(3)?;
     let (sc, fc, bc) = statics(converged)?;
@@ -149,7 +186,11 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
     let table1_conv = sweep_of(Kind::Free, converged, None)?;
     let tuned_pts = sweep_of(Kind::Free, 3, Some(tuned.track_radius))?;
     let locked_pts = sweep_of(Kind::Locked, 3, None)?;
-    let fmt_onset = |o: Option<f64>| o.map_or("none in 3.50–4.70 Hz".to_string(), |f| format!("{f:.2} Hz"));
+    let fmt_onset = |o: Option<f64>| {
+        o.map_or("none in 3.50–4.70 Hz".to_string(), |f| {
+            format!("{f:.2} Hz")
+        })
+    };
     let (o3, oc, ot) = (onset(&table1), onset(&table1_conv), onset(&tuned_pts));
     let near = |o: Option<f64>| o.is_some_and(|f| (3.90..=4.00).contains(&f));
     claims.push(Claim {
@@ -192,7 +233,14 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
     let free_amp = crate::run::half_range(&free413, 40.0, |r| r.tip_deflection);
     let tuned_amp = crate::run::half_range(&tuned413, 40.0, |r| r.tip_deflection);
     let first_impact = free413.iter().find(|r| r.impact).map(|r| r.t);
-    let kinetic = |e: f64, l: f64, b: f64| format!("beam KE {:.2} → {:.2} mJ (0–10 s → 50–60 s), ball KE {:.2} mJ", e * 1e3, l * 1e3, b * 1e3);
+    let kinetic = |e: f64, l: f64, b: f64| {
+        format!(
+            "beam KE {:.2} → {:.2} mJ (0–10 s → 50–60 s), ball KE {:.2} mJ",
+            e * 1e3,
+            l * 1e3,
+            b * 1e3
+        )
+    };
     claims.push(Claim {
         claim: "energy transfer at 4.13 Hz: beam kinetic energy dies away, the ball's stays (Figs. 19–21)",
         paper: "beam KE → small, ball KE persists".into(),
@@ -220,7 +268,8 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
     let bp3 = beat_period(&free425, 20.0);
     let bpc = beat_period(&free425c, 20.0);
     let (p1, p2) = ball_peaks(&free425, 20.0, h);
-    let fmt_beat = |b: Option<f64>| b.map_or("no regular envelope".to_string(), |p| format!("{p:.1} s"));
+    let fmt_beat =
+        |b: Option<f64>| b.map_or("no regular envelope".to_string(), |p| format!("{p:.1} s"));
     let impacts425 = free425.iter().filter(|r| r.impact).count();
     claims.push(Claim {
         claim: "beating of the ball at 4.25 Hz, period 3.9 s, peaks near 1.9 and 2.2 Hz (eqs. 30–33, Figs. 22–23)",
@@ -249,7 +298,11 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
         paper: "≈ 0.003 m".into(),
         n3: format!("{:.4} m", y3),
         converged: format!("{:.4} m", yc),
-        verdict: if (y3 - 0.003).abs() < 0.002 { "reproduced" } else { "not reproduced" },
+        verdict: if (y3 - 0.003).abs() < 0.002 {
+            "reproduced"
+        } else {
+            "not reproduced"
+        },
         reason: "Deflection relative to the base (the base moves ±0.5 mm).".into(),
     });
     claims.push(Claim {
@@ -265,7 +318,9 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
     });
 
     progress("figures");
-    let pts = |p: &[SweepPoint], f: fn(&SweepPoint) -> f64| p.iter().map(|q| (q.frequency, f(q))).collect::<Vec<_>>();
+    let pts = |p: &[SweepPoint], f: fn(&SweepPoint) -> f64| {
+        p.iter().map(|q| (q.frequency, f(q))).collect::<Vec<_>>()
+    };
     let tip_mm = |q: &SweepPoint| q.tip_amplitude * 1e3;
     let ball_deg = |q: &SweepPoint| q.ball_amplitude_deg;
     render(
@@ -278,7 +333,10 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
                 "tip amplitude [mm]",
                 vec![
                     Series::marked("free ball, Table 1, N = 3", pts(&table1, tip_mm)),
-                    Series::marked(&format!("free ball, Table 1, N = {converged}"), pts(&table1_conv, tip_mm)),
+                    Series::marked(
+                        &format!("free ball, Table 1, N = {converged}"),
+                        pts(&table1_conv, tip_mm),
+                    ),
                     Series::marked("free ball, tuned R, N = 3", pts(&tuned_pts, tip_mm)),
                     Series::marked("locked ball, N = 3", pts(&locked_pts, tip_mm)),
                 ],
@@ -289,7 +347,10 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
                 "ball angle amplitude [deg]",
                 vec![
                     Series::marked("free ball, Table 1, N = 3", pts(&table1, ball_deg)),
-                    Series::marked(&format!("free ball, Table 1, N = {converged}"), pts(&table1_conv, ball_deg)),
+                    Series::marked(
+                        &format!("free ball, Table 1, N = {converged}"),
+                        pts(&table1_conv, ball_deg),
+                    ),
                     Series::marked("free ball, tuned R, N = 3", pts(&tuned_pts, ball_deg)),
                 ],
             ),
@@ -298,7 +359,12 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
         2,
         (1400, 560),
     )?;
-    let series = |rows: &[Row], f: fn(&Row) -> f64| rows.iter().step_by(4).map(|r| (r.t, f(r))).collect::<Vec<_>>();
+    let series = |rows: &[Row], f: fn(&Row) -> f64| {
+        rows.iter()
+            .step_by(4)
+            .map(|r| (r.t, f(r)))
+            .collect::<Vec<_>>()
+    };
     render(
         &img.join("validation-4p13.png"),
         "4.13 Hz, N = 3: locked ball, free ball with Table 1's R and with the tuned R (paper Figs. 16, 19, 20)",
@@ -345,7 +411,10 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
             "ball angle relative to the housing",
             "t [s]",
             "α [deg]",
-            vec![Series::line("free ball", series(&free425, |r| r.ball_rel_angle.to_degrees()))],
+            vec![Series::line(
+                "free ball",
+                series(&free425, |r| r.ball_rel_angle.to_degrees()),
+            )],
         )],
         1,
         1,
@@ -355,7 +424,10 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
     let mut md = String::new();
     writeln!(md, "# Validation against the paper")?;
     writeln!(md)?;
-    writeln!(md, "Generated by `cargo run --release -p host-sim -- validation` (do not edit by hand).")?;
+    writeln!(
+        md,
+        "Generated by `cargo run --release -p host-sim -- validation` (do not edit by hand)."
+    )?;
     writeln!(md)?;
     writeln!(
         md,
@@ -366,10 +438,17 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
          reproduce, the reason found is given."
     )?;
     writeln!(md)?;
-    writeln!(md, "| claim | paper | N = 3 | N = {converged} | verdict | reason |")?;
+    writeln!(
+        md,
+        "| claim | paper | N = 3 | N = {converged} | verdict | reason |"
+    )?;
     writeln!(md, "| --- | --- | --- | --- | --- | --- |")?;
     for c in &claims {
-        writeln!(md, "| {} | {} | {} | {} | **{}** | {} |", c.claim, c.paper, c.n3, c.converged, c.verdict, c.reason)?;
+        writeln!(
+            md,
+            "| {} | {} | {} | {} | **{}** | {} |",
+            c.claim, c.paper, c.n3, c.converged, c.verdict, c.reason
+        )?;
     }
     writeln!(md)?;
     writeln!(md, "## Frequency response (Fig. 10)")?;
@@ -378,7 +457,12 @@ pub fn write(doc: &Path, img: &Path, converged: usize, progress: &(dyn Fn(&str) 
     writeln!(md)?;
     writeln!(md, "| f [Hz] | tip, Table 1 [mm] | ball, Table 1 [deg] | impacts | tip, tuned R [mm] | ball, tuned R [deg] | tip, locked [mm] |")?;
     writeln!(md, "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")?;
-    for (((a, t), l), f) in table1.iter().zip(&tuned_pts).zip(&locked_pts).zip(PAPER_FREQUENCIES) {
+    for (((a, t), l), f) in table1
+        .iter()
+        .zip(&tuned_pts)
+        .zip(&locked_pts)
+        .zip(PAPER_FREQUENCIES)
+    {
         writeln!(
             md,
             "| {f:.2} | {:.2} | {:.1} | {} | {:.2} | {:.1} | {:.2} |",

@@ -192,7 +192,11 @@ impl Noise {
         let parts = (0..count)
             .map(|i| {
                 let f = f_lo + (f_hi - f_lo) * (i as f64 + uniform()) / count as f64;
-                (amp, std::f64::consts::TAU * f, std::f64::consts::TAU * uniform())
+                (
+                    amp,
+                    std::f64::consts::TAU * f,
+                    std::f64::consts::TAU * uniform(),
+                )
             })
             .collect();
         Self { parts }
@@ -200,7 +204,10 @@ impl Noise {
 
     /// ÿ_b(t).
     pub fn accel(&self, t: f64) -> f64 {
-        self.parts.iter().map(|&(a, w, p)| a * (w * t + p).sin()).sum()
+        self.parts
+            .iter()
+            .map(|&(a, w, p)| a * (w * t + p).sin())
+            .sum()
     }
 }
 
@@ -375,7 +382,12 @@ fn hermite(t0: f64, y0: f64, d0: f64, t1: f64, y1: f64, d1: f64, t: f64) -> f64 
 
 /// Runs `sim` (step `h`) for `duration` s under `input` and samples it on the common grid by
 /// cubic Hermite interpolation (values and rates at both step ends; exact at grid-aligned steps).
-pub fn simulate<P: Probe + ?Sized>(sim: &mut P, h: f64, input: &Input, duration: f64) -> Trajectory {
+pub fn simulate<P: Probe + ?Sized>(
+    sim: &mut P,
+    h: f64,
+    input: &Input,
+    duration: f64,
+) -> Trajectory {
     let start = Instant::now();
     // Enough steps to reach the last grid point (3 ms does not divide 10 s).
     let steps = (duration / h - 1e-9).ceil() as usize;
@@ -417,8 +429,10 @@ pub fn simulate<P: Probe + ?Sized>(sim: &mut P, h: f64, input: &Input, duration:
                 tr.tip.push(cur[1]);
                 tr.ball.push(cur[3]);
             } else {
-                tr.tip.push(hermite(t0, prev[1], prev[2], t1, cur[1], cur[2], t));
-                tr.ball.push(hermite(t0, prev[3], prev[4], t1, cur[3], cur[4], t));
+                tr.tip
+                    .push(hermite(t0, prev[1], prev[2], t1, cur[1], cur[2], t));
+                tr.ball
+                    .push(hermite(t0, prev[3], prev[4], t1, cur[3], cur[4], t));
             }
             next_j += 1;
         }
@@ -577,11 +591,14 @@ pub fn statistics(t: &Trajectory, last: f64) -> (f64, f64, f64, f64) {
     let ss = &t.tip[from_ss.min(n)..];
     let (lo, hi) = ss
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
     let amplitude = if lo <= hi { 0.5 * (hi - lo) } else { f64::NAN };
     let w = &t.tip[from10.min(n)..];
     let mean = w.iter().sum::<f64>() / w.len().max(1) as f64;
-    let dyn_rms = (w.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / w.len().max(1) as f64).sqrt();
+    let dyn_rms =
+        (w.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / w.len().max(1) as f64).sqrt();
     let b = &t.ball[from10.min(n)..];
     let ball_rms = if b.iter().all(|x| x.is_finite()) {
         (b.iter().map(|x| x * x).sum::<f64>() / b.len().max(1) as f64).sqrt()
@@ -622,8 +639,16 @@ pub fn compare(c: &Trajectory, r: &Trajectory, window: f64, last: f64) -> Errors
         tip_max_5: max(j5, &err),
         tip_rms: inf_if(rms(jw)),
         tip_max: inf_if(max(jw, &err)),
-        ball_max_5: if ball_locked { f64::NAN } else { max(j5, &berr) },
-        ball_max: if ball_locked { f64::NAN } else { inf_if(max(jw, &berr)) },
+        ball_max_5: if ball_locked {
+            f64::NAN
+        } else {
+            max(j5, &berr)
+        },
+        ball_max: if ball_locked {
+            f64::NAN
+        } else {
+            inf_if(max(jw, &berr))
+        },
         amplitude: inf_if(amplitude),
         separation,
         dyn_rms,

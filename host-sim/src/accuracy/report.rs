@@ -162,7 +162,11 @@ struct Convergence {
 }
 
 fn rms_dynamic(t: &Trajectory) -> f64 {
-    (t.tip.iter().map(|x| (x - t.static_tip).powi(2)).sum::<f64>() / t.tip.len().max(1) as f64)
+    (t.tip
+        .iter()
+        .map(|x| (x - t.static_tip).powi(2))
+        .sum::<f64>()
+        / t.tip.len().max(1) as f64)
         .sqrt()
 }
 
@@ -245,7 +249,10 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     );
     // 1. Convergence of the reference.
     let conv = convergence(&p, &cache)?;
-    eprintln!("accuracy: convergence done ({:.0} s)", started.elapsed().as_secs_f64());
+    eprintln!(
+        "accuracy: convergence done ({:.0} s)",
+        started.elapsed().as_secs_f64()
+    );
     // 2. References.
     let all = scenes();
     let rcfg = reference_config(p.n_ref, p.h_ref);
@@ -259,7 +266,10 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         }
     }
     let f1_ref = full_f1(p.n_ref)?;
-    eprintln!("accuracy: references done ({:.0} s)", started.elapsed().as_secs_f64());
+    eprintln!(
+        "accuracy: references done ({:.0} s)",
+        started.elapsed().as_secs_f64()
+    );
     // Pointwise window: up to the reference's first impact (chaotic after it).
     let windows: Vec<f64> = refs
         .iter()
@@ -283,7 +293,10 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         .par_iter()
         .map(embedded_f1)
         .collect::<Result<Vec<_>>>()?;
-    eprintln!("accuracy: candidates done ({:.0} s)", started.elapsed().as_secs_f64());
+    eprintln!(
+        "accuracy: candidates done ({:.0} s)",
+        started.elapsed().as_secs_f64()
+    );
     let timing_scene = all
         .iter()
         .find(|s| s.name == "free-4.13")
@@ -309,7 +322,10 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
             time,
         });
     }
-    eprintln!("accuracy: timing done ({:.0} s)", started.elapsed().as_secs_f64());
+    eprintln!(
+        "accuracy: timing done ({:.0} s)",
+        started.elapsed().as_secs_f64()
+    );
     let ctx = Ctx {
         p,
         conv,
@@ -367,9 +383,9 @@ fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
         .iter()
         .map(|&(x, y)| {
             y.is_finite()
-                && !points.iter().any(|&(x2, y2)| {
-                    y2.is_finite() && x2 <= x && y2 <= y && (x2 < x || y2 < y)
-                })
+                && !points
+                    .iter()
+                    .any(|&(x2, y2)| y2.is_finite() && x2 <= x && y2 <= y && (x2 < x || y2 < y))
         })
         .collect()
 }
@@ -388,7 +404,8 @@ fn pct(x: f64, scale: f64) -> String {
 }
 
 fn sep(x: Option<f64>) -> String {
-    x.map(|t| format!("{t:.1}")).unwrap_or_else(|| "never".into())
+    x.map(|t| format!("{t:.1}"))
+        .unwrap_or_else(|| "never".into())
 }
 
 impl Ctx {
@@ -504,7 +521,10 @@ impl Ctx {
         );
         let f413 = self.idx("free-4.13");
         writeln!(m, "| configuration | Pareto | host µs per simulated s | Newton it./step (free 4.13) | f₁ err [%] | locked 4.13: RMS / max tip err, 5 s [%] | locked 4.13: RMS / max, {0} s [%] | locked 4.13: amplitude err [%] | free 3.70: RMS / max tip, {0} s [%] | free 3.70: max θ err [mrad] | locked noise: RMS / max, {0} s [%] | free 4.13: max tip err before 1st impact [%] | free 4.13: separation [s] | E [%] |", p.duration)?;
-        writeln!(m, "|---|:-:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+        writeln!(
+            m,
+            "|---|:-:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        )?;
         for (i, r) in self.rows.iter().enumerate() {
             let sc = |s: usize| peak_dynamic(&self.refs[s]);
             let (amp_ref, _, _, _) = statistics(&self.refs[l], p.last);
@@ -537,17 +557,17 @@ impl Ctx {
             .rows
             .iter()
             .flat_map(|r| {
-                r.failures
-                    .iter()
-                    .zip(&self.all)
-                    .filter_map(move |(f, s)| {
-                        f.as_ref()
-                            .map(|f| format!("- `{}` on {}: {f}", r.cfg.label(), s.title))
-                    })
+                r.failures.iter().zip(&self.all).filter_map(move |(f, s)| {
+                    f.as_ref()
+                        .map(|f| format!("- `{}` on {}: {f}", r.cfg.label(), s.title))
+                })
             })
             .collect();
         if !fails.is_empty() {
-            writeln!(m, "\nRuns that stopped early (their errors are shown as `fails`):\n")?;
+            writeln!(
+                m,
+                "\nRuns that stopped early (their errors are shown as `fails`):\n"
+            )?;
             for f in fails {
                 writeln!(m, "{f}")?;
             }
@@ -555,14 +575,21 @@ impl Ctx {
         self.plot_pareto(out, &pts, &front)?;
         writeln!(m, "\n![error vs run time](img/accuracy_pareto.png)\n")?;
         // Chaotic statistics.
-        writeln!(m, "## 4. Chaotic scenes: statistics, not pointwise errors\n")?;
+        writeln!(
+            m,
+            "## 4. Chaotic scenes: statistics, not pointwise errors\n"
+        )?;
         writeln!(m, "{}", include_str!("chaos-notes.md"))?;
         let chaotic: Vec<usize> = (0..self.all.len())
             .filter(|&s| !self.refs[s].impacts.is_empty())
             .collect();
         write!(m, "| configuration |")?;
         for &s in &chaotic {
-            write!(m, " {}: tip RMS [mm] / impacts/s / θ RMS [deg] / separation [s] |", self.all[s].title)?;
+            write!(
+                m,
+                " {}: tip RMS [mm] / impacts/s / θ RMS [deg] / separation [s] |",
+                self.all[s].title
+            )?;
         }
         writeln!(m)?;
         write!(m, "|---|")?;
@@ -573,7 +600,13 @@ impl Ctx {
         write!(m, "| **reference** |")?;
         for &s in &chaotic {
             let (_, d, b, ips) = statistics(&self.refs[s], p.last);
-            write!(m, " {:.2} / {:.2} / {:.1} / – |", d * 1e3, ips, b.to_degrees())?;
+            write!(
+                m,
+                " {:.2} / {:.2} / {:.1} / – |",
+                d * 1e3,
+                ips,
+                b.to_degrees()
+            )?;
         }
         writeln!(m)?;
         for r in &self.rows {
@@ -596,7 +629,10 @@ impl Ctx {
             writeln!(m)?;
         }
         self.plot_traces(out)?;
-        writeln!(m, "\n![tip error of the default configuration](img/accuracy_traces.png)\n")?;
+        writeln!(
+            m,
+            "\n![tip error of the default configuration](img/accuracy_traces.png)\n"
+        )?;
         self.key_numbers(&mut m, &pts)?;
         writeln!(m, "{}", include_str!("recommendation.md"))?;
         Ok(m)
@@ -614,9 +650,11 @@ impl Ctx {
         let list = [
             d,
             d.with(|c| c.newton = Newton::Modified),
-            d.with(|c| c.elements = 4).with(|c| c.newton = Newton::Modified),
+            d.with(|c| c.elements = 4)
+                .with(|c| c.newton = Newton::Modified),
             d.with(|c| c.elements = 6),
-            d.with(|c| c.elements = 6).with(|c| c.newton = Newton::Modified),
+            d.with(|c| c.elements = 6)
+                .with(|c| c.newton = Newton::Modified),
             d.with(|c| c.elements = 6).with(|c| c.f32 = false),
         ];
         for c in list {
@@ -658,7 +696,12 @@ impl Ctx {
             &out.join("img/accuracy_convergence.png"),
             "Convergence of the full-solver reference",
             &[
-                Panel::new("f₁, locked ball", "N", "f₁ [Hz]", vec![Series::marked("", f)]),
+                Panel::new(
+                    "f₁, locked ball",
+                    "N",
+                    "f₁ [Hz]",
+                    vec![Series::marked("", f)],
+                ),
                 Panel::new(
                     "RMS tip deflection, locked 4.13 Hz, 5 s",
                     "N",
@@ -736,12 +779,12 @@ impl Ctx {
             .filter(|(_, p)| p.0.is_finite() && p.1.is_finite() && p.0 > 0.0 && p.1 > 0.0)
             .map(|(i, p)| (p.0 * 1e6, p.1, i))
             .collect();
-        let (x0, x1) = fin
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
-        let (y0, y1) = fin
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
+        let (x0, x1) = fin.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+            (a.min(p.0), b.max(p.0))
+        });
+        let (y0, y1) = fin.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+            (a.min(p.1), b.max(p.1))
+        });
         let root = BitMapBackend::new(&path, (1300, 850)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let mut chart = ChartBuilder::on(&root)

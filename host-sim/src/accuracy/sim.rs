@@ -125,7 +125,7 @@ fn boxed<T: Real + Send, S: Scene + Send, const N: usize, const D: usize>(
     boot.integrator.accept_after_budget = false;
     let first = Model::<T, S, N, D>::at_rest(boot, a0)?;
     let mut model = Model::<T, S, N, D>::new(params)?;
-    model.set_state(first.state().clone());
+    model.set_state(*first.state());
     Ok(Box::new(EmbeddedSim {
         model,
         static_tip: to_f64(first.static_tip_deflection()),
