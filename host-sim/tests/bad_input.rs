@@ -1,0 +1,341 @@
+//! Bad input to the host tools: every loader and constructor rejects non-finite, negative, zero
+//! or inconsistent values with an error naming the field; the binary prints one line and exits
+//! non-zero, never a backtrace. (Complements `tests/cli.rs`.)
+
+use absorber_core::{Error, Params};
+use host_sim::excitation::Excitation;
+use host_sim::full::{FullSolver, SceneKind};
+use host_sim::scene::Scene;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("host-sim-bad-input-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+fn err_of(text: &str) -> String {
+    match Scene::from_toml(text) {
+        Ok(_) => panic!("accepted: `{text}`"),
+        Err(e) => format!("{e:#}"),
+    }
+}
+
+/// Every numeric key of a scene file, with non-finite, negative and zero values (where zero is
+/// invalid): an error naming the key, on one line.
+#[test]
+fn every_scene_key_rejects_bad_numbers_by_name() {
+    let keys: &[(&str, &str, bool)] = &[
+        // (section, key, zero is invalid)
+        ("beam", "length", true),
+        ("beam", "mass", true),
+        ("beam", "area", true),
+        ("beam", "modulus", true),
+        ("beam", "inertia", true),
+        ("tip", "mass", true),
+        ("tip", "inertia", true),
+        ("tip", "offset", false),
+        ("ball", "mass", true),
+        ("ball", "inertia", false),
+        ("ball", "radius", true),
+        ("ball", "track_radius", true),
+        ("ball", "stop_angle_deg", true),
+        ("ball", "restitution", false),
+        ("ball", "stick_speed", false),
+        ("integrator", "gamma", true),
+        ("integrator", "beta", true),
+        ("integrator", "step", true),
+        ("integrator", "tolerance", true),
+        ("damping", "stiffness_proportional", false),
+        ("excitation", "frequency", true),
+        ("excitation", "amplitude", false),
+    ];
+    for &(section, key, zero_bad) in keys {
+        let mut values = vec!["nan", "inf", "-inf", "-1.0"];
+        if zero_bad {
+            values.push("0.0");
+        }
+        for v in values {
+            let text = format!("[{section}]\n{key} = {v}\n");
+            let e = err_of(&text);
+            let name = format!("{section}.{key}");
+            assert!(
+                e.contains(&name),
+                "`{text}` gave `{e}`, which does not name `{name}`"
+            );
+            assert!(!e.contains('\n'), "{e}");
+        }
+    }
+    for (text, key) in [
+        ("gravity = nan\n", "gravity"),
+        ("gravity = inf\n", "gravity"),
+        ("duration = nan\n", "duration"),
+        ("duration = -1.0\n", "duration"),
+        ("duration = inf\n", "duration"),
+        ("elements = 0\n", "elements"),
+        ("elements = -3\n", "elements"),
+        (
+            "[ball]\ninitial_angle_deg = nan\n",
+            "ball.initial_angle_deg",
+        ),
+        (
+            "[ball]\ninitial_angle_deg = 70.0\n",
+            "ball.initial_angle_deg",
+        ),
+        (
+            "[integrator]\nmax_iterations = -1\n",
+            "integrator.max_iterations",
+        ),
+        ("[damping]\nratio = nan\nfrequency = 4.0\n", "damping.ratio"),
+        (
+            "[damping]\nratio = 0.01\nfrequency = 0.0\n",
+            "damping.frequency",
+        ),
+        (
+            "[damping]\nratio = 0.01\nfrequency = nan\n",
+            "damping.frequency",
+        ),
+        ("[outputs]\ntransient = -1.0\n", "outputs.transient"),
+        ("[outputs]\ntransient = nan\n", "outputs.transient"),
+        ("[outputs]\nevery = 0\n", "outputs.every"),
+    ] {
+        let e = err_of(text);
+        assert!(
+            e.contains(key),
+            "`{text}` gave `{e}`, which does not name `{key}`"
+        );
+        assert!(!e.contains('\n'), "{e}");
+    }
+}
+
+/// Inconsistent combinations are named too.
+#[test]
+fn inconsistent_scene_values_are_named() {
+    for (text, key) in [
+        ("[ball]\nradius = 0.05\n", "ball.track_radius"),
+        ("[ball]\nstop_angle_deg = 180.0\n", "ball.stop_angle_deg"),
+        ("[integrator]\ngamma = 0.9\nbeta = 0.3\n", "integrator.beta"),
+        ("[integrator]\ngamma = 1.5\n", "integrator.gamma"),
+        (
+            "[excitation]\ntype = \"csv\"\nfile = \"a.csv\"\nfrequency = 3.0\n",
+            "excitation.frequency",
+        ),
+        ("[excitation]\ntype = \"csv\"\n", "excitation.file"),
+        ("[excitation]\nfile = \"a.csv\"\n", "excitation.file"),
+        (
+            "[damping]\nstiffness_proportional = 0.001\nratio = 0.01\nfrequency = 4.0\n",
+            "damping.ratio",
+        ),
+        (
+            "solver = \"full\"\nprecision = \"f32\"\nduration = 0.01\n",
+            "f64",
+        ),
+    ] {
+        match Scene::from_toml(text) {
+            Err(e) => {
+                let e = format!("{e:#}");
+                assert!(
+                    e.contains(key),
+                    "`{text}` gave `{e}`, which does not name `{key}`"
+                );
+                assert!(!e.contains('\n'), "{e}");
+            }
+            Ok(scene) => {
+                // Some checks happen when the solver is built.
+                let e = host_sim::run::build_simulator(&scene, 0.0)
+                    .err()
+                    .map(|e| format!("{e:#}"))
+                    .unwrap_or_else(|| panic!("`{text}` accepted"));
+                assert!(e.contains(key), "`{text}` gave `{e}`");
+            }
+        }
+    }
+}
+
+/// The full solver's constructor validates like the core and names the field.
+#[test]
+fn full_solver_rejects_bad_parameters_by_name() {
+    let field = |e: Error| match e {
+        Error::InvalidParameter { field, .. } => field,
+        other => panic!("expected InvalidParameter, got {other:?}"),
+    };
+    for (change, name) in [
+        (
+            (|p: &mut Params<f64>| p.beam.length = f64::NAN) as fn(&mut Params<f64>),
+            "beam.length",
+        ),
+        (|p| p.beam.modulus = -1.0, "beam.modulus"),
+        (|p| p.tip.mass = 0.0, "tip.mass"),
+        (|p| p.ball.radius = f64::INFINITY, "ball.radius"),
+        (|p| p.ball.track_radius = 0.001, "ball.track_radius"),
+        (|p| p.integrator.step = 0.0, "integrator.step"),
+        (|p| p.gravity = f64::NAN, "gravity"),
+    ] {
+        let mut p = Params::default();
+        change(&mut p);
+        let e = FullSolver::new(p, SceneKind::FreeBall, 3).unwrap_err();
+        assert_eq!(field(e), name);
+    }
+    assert!(FullSolver::new(Params::default(), SceneKind::FreeBall, 0).is_err());
+}
+
+/// The full solver's step rejects a non-finite input and keeps its state.
+#[test]
+fn full_solver_step_rejects_non_finite_input_and_keeps_the_state() {
+    let mut s = FullSolver::at_rest(Params::default(), SceneKind::FreeBall, 2, 0.0).unwrap();
+    for k in 0..20 {
+        s.step(0.3 * (k as f64 * 0.2).sin()).unwrap();
+    }
+    let before = s.state().clone();
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        assert_eq!(s.step(bad), Err(Error::NonFiniteInput));
+        assert_eq!(*s.state(), before);
+    }
+    // A violent sample: an error (no convergence) or a finite step, never a panic or NaN.
+    match s.step(1e9) {
+        Ok(_) => assert!(s.state().q.iter().all(|x| x.is_finite())),
+        Err(_) => assert_eq!(*s.state(), before),
+    }
+    s.step(0.0).unwrap();
+}
+
+/// Malformed CSV excitations: clear errors (more in `tests/cli.rs`).
+#[test]
+fn malformed_csv_is_a_clear_error() {
+    let h = 1e-3;
+    for (text, what) in [
+        ("", "at least 2"),
+        ("# only a comment\n", "at least 2"),
+        ("t,accel\n", "at least 2"),
+        ("0,nan\n0.001,0\n", "not finite"),
+        ("nan,0\n0.001,0\n", "not finite"),
+        ("0,0\n0.001,1e400\n", "not finite"),
+        ("0,0\n-0.001,0\n", "does not increase"),
+        ("0,0,0\n0.001,0,0\n", "2 columns"),
+        ("0,0\n0.001,0\nx,y\n", "line 3"),
+        ("0;0\n0.001;abc\n", "line 2"),
+    ] {
+        let e = format!(
+            "{:#}",
+            Excitation::from_csv_text(text, h, None).expect_err(text)
+        );
+        assert!(e.contains(what), "`{text}` gave `{e}`");
+        assert!(!e.contains('\n'), "{e}");
+    }
+    // Bytes that are not UTF-8.
+    let p = tmp("binary.csv");
+    std::fs::write(&p, [0xff, 0xfe, 0x00, 0x41]).unwrap();
+    assert!(Excitation::from_csv(&p, h, None).is_err());
+}
+
+fn one_line_failure(args: &[&str], extra: Option<&std::path::Path>, needle: &str) {
+    let mut cmd = bin();
+    cmd.args(args);
+    if let Some(p) = extra {
+        cmd.arg(p);
+    }
+    let out = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+    assert!(
+        err.starts_with("error: ") && err.trim_end().lines().count() == 1,
+        "{args:?}: {err}"
+    );
+    assert!(
+        !err.contains("panic") && !err.contains("backtrace") && !err.contains("RUST_BACKTRACE"),
+        "{err}"
+    );
+    assert!(err.contains(needle), "{args:?}: `{err}` lacks `{needle}`");
+}
+
+/// The binary: malformed scene or CSV files give one line on stderr and exit code 1.
+#[test]
+fn binary_reports_malformed_files_on_one_line() {
+    let cases: &[(&str, &str, &str)] = &[
+        ("syntax.toml", "[beam\nlength = 1\n", "line"),
+        ("type.toml", "[beam]\nlength = \"long\"\n", "beam.length"),
+        ("nan.toml", "[beam]\nlength = nan\n", "beam.length"),
+        ("neg.toml", "[tip]\ninertia = -1e-5\n", "tip.inertia"),
+        ("unknown.toml", "[ball]\ncolour = 1\n", "colour"),
+        ("zero.toml", "[integrator]\nstep = 0.0\n", "integrator.step"),
+        ("binary.toml", "\u{0}\u{1}\u{2}", "line"),
+    ];
+    for (name, text, needle) in cases {
+        let p = tmp(name);
+        std::fs::write(&p, text).unwrap();
+        one_line_failure(&["static", "--scene"], Some(&p), needle);
+    }
+    // A scene whose CSV is malformed, and one that is not UTF-8.
+    let csv = tmp("bad.csv");
+    std::fs::write(&csv, "t,accel\n0,0\n0.001,oops\n").unwrap();
+    let scene = tmp("csv-scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "duration = 0.002\n[integrator]\nstep = 0.001\n[excitation]\ntype = \"csv\"\nfile = \"{}\"\n",
+            csv.display()
+        ),
+    )
+    .unwrap();
+    one_line_failure(&["run", "--no-plots", "--scene"], Some(&scene), "line 3");
+    let nan_csv = tmp("nan.csv");
+    std::fs::write(&nan_csv, "0,0\n0.001,NaN\n0.002,0\n").unwrap();
+    std::fs::write(
+        &scene,
+        format!(
+            "duration = 0.002\n[integrator]\nstep = 0.001\n[excitation]\ntype = \"csv\"\nfile = \"{}\"\n",
+            nan_csv.display()
+        ),
+    )
+    .unwrap();
+    one_line_failure(
+        &["run", "--no-plots", "--scene"],
+        Some(&scene),
+        "not finite",
+    );
+    let bin_scene = tmp("latin1.toml");
+    std::fs::write(&bin_scene, [b'n', b'a', b'm', b'e', b'=', 0xe9, b'\n']).unwrap();
+    let out = bin()
+        .args(["static", "--scene"])
+        .arg(&bin_scene)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.starts_with("error: ") && err.trim_end().lines().count() == 1,
+        "{err}"
+    );
+    // Overrides on the command line.
+    one_line_failure(&["static", "--step", "nan"], None, "integrator.step");
+    one_line_failure(&["static", "--step=-0.001"], None, "integrator.step");
+    one_line_failure(
+        &[
+            "run",
+            "--no-plots",
+            "--amplitude",
+            "inf",
+            "--duration",
+            "0.01",
+        ],
+        None,
+        "excitation.amplitude",
+    );
+    one_line_failure(
+        &[
+            "run",
+            "--no-plots",
+            "--frequency",
+            "0",
+            "--duration",
+            "0.01",
+        ],
+        None,
+        "excitation.frequency",
+    );
+}

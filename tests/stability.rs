@@ -1,0 +1,130 @@
+//! The stability matrix (`host_sim::stability`), short runs: stiff and extreme cases, bad input
+//! sequences, both solvers, f32 and f64. Each case is bounded by the base's work
+//! (`E − E₀ ≤ W + ε`), NaN-free, or fails with the expected clear error and keeps its state.
+//! The long runs and the drift study are in `host-sim stability` (docs/stability.md).
+
+use host_sim::stability::{matrix, run_all, run_case, Bodies, Case, Engine, Expect, Input, Length};
+
+#[test]
+fn quick_stability_matrix() {
+    let cases = matrix(Length::Quick);
+    assert!(cases.len() > 60);
+    let outcomes = run_all(&cases, 2, |_, _| {});
+    let mut bad = Vec::new();
+    for (c, o) in cases.iter().zip(&outcomes) {
+        assert!(
+            !o.panicked,
+            "{} ({}) panicked: {:?}",
+            c.name,
+            c.engine.name(),
+            o.error
+        );
+        if let Some(kept) = o.state_kept {
+            assert!(
+                kept,
+                "{} ({}): a failed step changed the state",
+                c.name,
+                c.engine.name()
+            );
+        }
+        if !o.passes(&c.expect) && c.known_issue.is_none() {
+            bad.push(format!(
+                "{} ({}): margin {:.2e} / start-up {:.2e}, error {:?}",
+                c.name,
+                c.engine.name(),
+                o.margin,
+                o.margin_startup,
+                o.error
+            ));
+        }
+    }
+    assert!(bad.is_empty(), "unexpected outcomes:\n{}", bad.join("\n"));
+}
+
+/// The full solver's vertical momentum (computed in the probe from maximal coordinates) agrees
+/// with the core's `vertical_momentum` on the same run.
+#[test]
+fn full_and_core_momenta_agree() {
+    use absorber_core::{FreeBallModel, Model, Params};
+    use host_sim::full::{FullSolver, SceneKind};
+    use host_sim::stability::FullProbe;
+    let p = Params::<f64>::default();
+    let mut core: FreeBallModel<f64, 3, 13> = Model::at_rest(p, 0.0).unwrap();
+    let mut full = FullProbe {
+        solver: FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0).unwrap(),
+        bodies: Bodies::Free,
+        params: p,
+    };
+    let mut worst = 0.0f64;
+    let mut largest = 0.0f64;
+    // Σ m y of the full solver's bodies: its rate is the momentum.
+    let y_of = |f: &FullProbe| {
+        let s = f.solver.state();
+        let n = 3;
+        let l = p.beam.length / n as f64;
+        let me = p.beam.mass / n as f64;
+        let mut y = 0.0;
+        for e in 0..n {
+            let (a, b) = (4 * e, 4 * e + 4);
+            y += me
+                * (0.5 * s.q[a + 1] + l / 12.0 * s.q[a + 3] + 0.5 * s.q[b + 1]
+                    - l / 12.0 * s.q[b + 3]);
+        }
+        y + p.tip.mass * s.q[4 * (n + 1) + 1] + p.ball.mass * s.q[4 * (n + 1) + 5]
+    };
+    let mut fd_worst = 0.0f64;
+    let (mut vdiff, mut vmax) = (0.0f64, 0.0f64);
+    let h = p.integrator.step;
+    for k in 1..200 {
+        let a = -3.0 * (k as f64 * 0.08).sin();
+        let (y0, p0) = (y_of(&full), full.vertical_momentum());
+        core.step(a).unwrap();
+        full.solver.step(a).unwrap();
+        // Trapezoid: Δ(Σ m y) ≈ h (p₀ + p₁)/2.
+        fd_worst =
+            fd_worst.max((y_of(&full) - y0 - 0.5 * h * (p0 + full.vertical_momentum())).abs() / h);
+        worst = worst.max((core.vertical_momentum() - full.vertical_momentum()).abs());
+        use host_sim::sim::Simulator;
+        vdiff = vdiff.max((core.tip_velocity() - full.solver.observe().tip_velocity).abs());
+        vmax = vmax.max(core.tip_velocity().abs());
+        largest = largest.max(core.vertical_momentum().abs());
+    }
+    eprintln!("tip velocity core vs full: {vdiff:.3e} of {vmax:.3e}");
+    eprintln!(
+        "core vs full p_y: {worst:.3e} of {largest:.3e}; full p_y vs d(Σ m y)/dt: {fd_worst:.3e}"
+    );
+    // The solvers' motions agree to rounding, and the full solver's p_y is the rate of its
+    // Σ m y (to Newmark's O(h) difference from the trapezoid).
+    assert!(vdiff < 1e-9 * vmax, "{vdiff:e} of {vmax:e}");
+    assert!(
+        largest > 1e-4 && fd_worst < 1e-3 * largest,
+        "{fd_worst:e} of {largest:e}"
+    );
+    // The core's `vertical_momentum()` differs from it by 0.23 % here (reported as a core
+    // issue); the energy bound is insensitive to it at this level. Keep the gap in view.
+    assert!(worst < 1e-2 * largest, "{worst:e} of {largest:e}");
+}
+
+/// A sequence that ends in garbage: the run stops with a clear error and the state kept.
+#[test]
+fn garbage_after_good_samples_is_a_clear_error() {
+    let mut v: Vec<f64> = (0..100).map(|k| (k as f64 * 0.1).sin()).collect();
+    v.push(f64::NEG_INFINITY);
+    let case = Case {
+        group: "input",
+        name: "garbage".into(),
+        engine: Engine::CoreF32,
+        bodies: Bodies::Free,
+        elements: 3,
+        params: Default::default(),
+        input: Input::Samples(v),
+        duration: 0.5,
+        expect: Expect::Error("not finite"),
+        note: "",
+        known_issue: None,
+    };
+    let o = run_case(&case);
+    assert!(o.passes(&case.expect), "{o:?}");
+    assert_eq!(o.steps, 99);
+    assert_eq!(o.state_kept, Some(true));
+}
