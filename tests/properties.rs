@@ -212,7 +212,9 @@ fn random_parameters_and_inputs_are_safe_and_bounded() {
                 if single {
                     let p32 = host_sim::core_sim::params_f32(&p);
                     match Model::at_rest(p32, accel[0] as f32) {
-                        Ok(m) => failed_steps.set(failed_steps.get() + check_run::<f32>(m, &accel[1..])?),
+                        Ok(m) => {
+                            failed_steps.set(failed_steps.get() + check_run::<f32>(m, &accel[1..])?)
+                        }
                         Err(e) => {
                             rejected.set(rejected.get() + 1);
                             prop_assert!(!e.to_string().is_empty());
@@ -220,7 +222,9 @@ fn random_parameters_and_inputs_are_safe_and_bounded() {
                     }
                 } else {
                     match Model::at_rest(p, accel[0]) {
-                        Ok(m) => failed_steps.set(failed_steps.get() + check_run::<f64>(m, &accel[1..])?),
+                        Ok(m) => {
+                            failed_steps.set(failed_steps.get() + check_run::<f64>(m, &accel[1..])?)
+                        }
                         Err(e) => {
                             rejected.set(rejected.get() + 1);
                             prop_assert!(!e.to_string().is_empty());

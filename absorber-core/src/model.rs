@@ -50,8 +50,11 @@ pub struct State<T, const D: usize> {
     pub v: SVector<T, D>,
     /// Accelerations relative to the base.
     pub a: SVector<T, D>,
-    /// Time since the start \[s\].
+    /// Time since the start \[s\], `steps · h` (not a running sum: in `f32` adding 3 ms to an
+    /// hour drifts by tens of seconds).
     pub time: T,
+    /// Whole steps taken since the start.
+    pub steps: u64,
     /// Base acceleration ÿ_b of the last step (the input at `time`) \[m/s²\].
     pub base_accel: T,
     /// Stop contact.
@@ -178,6 +181,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 v: z,
                 a: z,
                 time: T::zero(),
+                steps: 0,
                 base_accel: T::zero(),
                 contact: Contact::Off,
             },
@@ -466,6 +470,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             v: z,
             a: z,
             time: T::zero(),
+            steps: 0,
             base_accel: T::zero(),
             contact: Contact::Off,
         };
@@ -484,6 +489,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             v: SVector::zeros(),
             a: SVector::zeros(),
             time: T::zero(),
+            steps: 0,
             base_accel,
             contact: Contact::Off,
         };
@@ -536,6 +542,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             v,
             a: SVector::zeros(),
             time: T::zero(),
+            steps: 0,
             base_accel,
             contact: Contact::Off,
         };
@@ -610,6 +617,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             v: v_pred + a * ch.c_v,
             a,
             time: s.time + h,
+            steps: s.steps,
             base_accel,
             contact: s.contact,
         };
@@ -670,6 +678,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let h = self.params.integrator.step;
         let start = self.state;
         let (mut next, solved) = self.newmark(&start, h, base_accel, cache)?;
+        next.steps = start.steps.saturating_add(1);
         let mut report = StepReport {
             iterations: solved.iterations,
             increment: solved.increment,
@@ -710,6 +719,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         {
             return Err(Error::NonFiniteState);
         }
+        next.time = lit::<T>(next.steps as f64) * h;
         Ok((next, report))
     }
 

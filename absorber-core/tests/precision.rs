@@ -90,3 +90,17 @@ fn f32_and_f64_agree_at_4_13_hz_until_the_chaotic_motion_separates_them() {
     assert!(c.worst_before_impact < 1e-5 * 0.365);
     assert!(c.separation.is_none_or(|t| t > first + 1.0));
 }
+
+/// The clock does not drift in `f32`: after one hour of 3 ms steps the model reads 3600 s.
+/// A running sum `t += h` would be 21.5 s short (near 2048–4096 s each addition rounds to
+/// 12 ulps); `time = steps · h` rounds once (ulp at 3600 s: 0.24 ms).
+#[test]
+fn f32_time_after_one_hour_of_steps_is_3600_s() {
+    let mut m: absorber_core::BeamModel<f32, 1, 4> =
+        Model::at_rest(Params::default(), 0.0).unwrap();
+    for _ in 0..1_200_000 {
+        m.step(0.0).unwrap();
+    }
+    assert_eq!(m.state().steps, 1_200_000);
+    assert!((m.time() - 3600.0).abs() <= 1e-3, "{}", m.time());
+}

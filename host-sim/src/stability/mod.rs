@@ -112,7 +112,7 @@ impl Input {
                 x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
                 x ^= x >> 29;
                 let u = (x >> 11) as f64 / (1u64 << 53) as f64; // [0, 1)
-                let s = if *spike_every > 0 && k > 0 && k % spike_every == 0 {
+                let s = if *spike_every > 0 && k > 0 && k.is_multiple_of(*spike_every) {
                     *spike
                 } else {
                     0.0
@@ -1203,9 +1203,7 @@ pub fn drift(frequency: f64, duration: f64, window: f64) -> Result<Vec<DriftWind
 }
 
 fn fmt_e(x: f64) -> String {
-    if x.is_nan() {
-        "–".into()
-    } else if x == f64::NEG_INFINITY {
+    if x.is_nan() || x == f64::NEG_INFINITY {
         "–".into()
     } else {
         format!("{x:.1e}")
