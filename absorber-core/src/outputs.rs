@@ -48,21 +48,24 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         self.state.time
     }
 
-    /// Vertical momentum relative to the base, `p_y = t_yᵀ M(q) q̇` with `t_y` the rigid vertical
-    /// translation of all bodies \[kg·m/s\]. In the frame moving with the base the only energy
-    /// source is the inertial force −m ÿ_b, whose power is `−ÿ_b p_y`: integrating it gives the
-    /// work the base has done, the bound every run's energy must respect.
+    /// Vertical momentum relative to the base \[kg·m/s\]: `∫ μ ẏ dx` of the beam (per element
+    /// `−Q_f(g = 1) · u̇`, eq. 17) plus `m_t Ḃ_y + m_b Ḋ_y` of the tip mass and ball. In the
+    /// frame moving with the base the only energy source is the inertial force −m ÿ_b, whose
+    /// power is `−ÿ_b p_y`: integrating it gives the work the base has done, the bound every
+    /// run's energy must respect.
     pub fn vertical_momentum(&self) -> T {
-        let m = self.mass_matrix(&self.state, crate::model::Contact::Off);
+        let unit = self.beam.element.gravity_force(T::one());
         let mut p = T::zero();
-        for node in 0..N {
-            if let Some(row) = m
-                .fixed_rows::<1>(4 * node + 1)
-                .iter()
-                .zip(self.state.v.iter())
-                .try_fold(T::zero(), |acc, (mij, vj)| Some(acc + *mij * *vj))
-            {
-                p += row;
+        for k in 0..N {
+            p -= unit.dot(&crate::beam::gather(&self.state.v, k));
+        }
+        if S::HAS_TIP {
+            let y_rate = self.tip_velocity();
+            let (psi, psi_rate) = self.tip_angle();
+            p += self.params.tip.mass * (y_rate + self.params.tip.offset * psi_rate * psi.sin());
+            if let Some((theta, theta_rate)) = self.ball_angle() {
+                let rho = self.params.ball.path_radius();
+                p += self.params.ball.mass * (y_rate + rho * theta_rate * theta.sin());
             }
         }
         p

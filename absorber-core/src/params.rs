@@ -304,6 +304,13 @@ impl<T: Real> Params<T> {
         }
         positive(i.step, "integrator.step")?;
         positive(i.tolerance, "integrator.tolerance")?;
+        if i.tolerance < T::default_epsilon() * lit(16.0) {
+            return Err(Error::InvalidParameter {
+                field: "integrator.tolerance",
+                reason:
+                    "is below what this precision resolves (16 ε); f32 needs at least about 2e-6",
+            });
+        }
         if i.max_iterations == 0 {
             return Err(Error::InvalidParameter {
                 field: "integrator.max_iterations",
