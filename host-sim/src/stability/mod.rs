@@ -1097,8 +1097,8 @@ pub fn matrix(length: Length) -> Vec<Case> {
                 "known limit of W = M (docs/model.md): kHz end-node modes; clear error, state kept";
         }
         if c.name.starts_with("h = 0.1 ms (tolerance") && f32_core {
-            c.expect = Expect::Error("converge");
-            c.note = "tolerance 1.1e-8 is below what f32 resolves (~1e-6): clear error at rest";
+            c.expect = Expect::Error("integrator.tolerance");
+            c.note = "tolerance 1.1e-8 is below what f32 resolves (8 ε ≈ 9.5e-7): parameter error naming the field";
         }
         if c.engine == F && c.params.gravity == 0.0 {
             c.known_issue =
