@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue 5: the core on a Cortex-M4F. Installs what it needs (quick when present), builds the
-# firmware (profile `fw`: opt-level 3, fat LTO) for thumbv7em-none-eabihf, runs the free-ball,
-# beam-only and locked-ball scenes under `qemu-system-arm -M mps2-an386`, and fails unless every
+# firmware (profile `fw`: opt-level 3, fat LTO) for thumbv7em-none-eabihf, runs the free-ball
+# (full and modified Newton, and with the on-device monitor), beam-only and locked-ball scenes
+# under `qemu-system-arm -M mps2-an386`, and fails unless every
 # run reproduces the host f32 run of the same source bit for bit (the firmware checks the
 # host's state fingerprint, which covers every step's full state, and exits 0 only on a match;
 # this script also diffs the printed time histories).
@@ -39,7 +40,7 @@ cargo build -q -p absorber-firmware --target "$target" --profile fw --config fir
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail=0
-for scene in free free-modified beam locked empty; do
+for scene in free free-modified free-monitor beam locked empty; do
     "$tdir/release/fw-$scene" >"$out/$scene.host"
     hash=$(sed -n 's/^state_hash=//p' "$out/$scene.host")
     set +e

@@ -3,8 +3,8 @@
 //! `absorber-core` on a Cortex-M4F, run under QEMU (`-M mps2-an386`), and the same scene run on
 //! the host as the bit-for-bit reference.
 //!
-//! Every bin of this crate (`fw-free`, `fw-beam`, `fw-locked`, and the model-less baseline
-//! `fw-empty`) builds twice from one source:
+//! Every bin of this crate (`fw-free`, `fw-free-modified`, `fw-free-monitor`, `fw-beam`,
+//! `fw-locked`, and the model-less baseline `fw-empty`) builds twice from one source:
 //!
 //! * for `thumbv7em-none-eabihf`: `no_std`, `no_main`, cortex-m-rt, output and exit code through
 //!   semihosting; the model lives in a `static` (so it shows in `.bss`);
@@ -19,9 +19,12 @@
 //!
 //! The model step is called through [`Sim::step`], a non-inlined function per scene, so its
 //! instructions can be counted between its entry and its return address (see
-//! `scripts/embedded-report.sh`).
+//! `scripts/embedded-report.sh`). In `fw-free-monitor` ([`WithMonitor`]) that step also feeds an
+//! `absorber_core::monitor::Monitor`, through [`monitor_record`], itself non-inlined so the
+//! monitor's share is counted on its own.
 #![cfg_attr(target_os = "none", no_std)]
 
+use absorber_core::monitor::{Monitor, MonitorConfig, NoTwin};
 use absorber_core::{Error, Model, Params, Scene, StepReport};
 use core::fmt::{self, Write};
 
@@ -62,6 +65,8 @@ pub trait Sim: Sized {
     fn static_tip(&self) -> f32;
     /// Feeds every word of the dynamic state to `f`.
     fn state_words(&self, f: &mut dyn FnMut(u32));
+    /// Extra figures printed at every whole second, each also fed to `f` (none by default).
+    fn second(&self, _out: &mut dyn Write, _f: &mut dyn FnMut(u32)) {}
 }
 
 impl<S: Scene, const N: usize, const D: usize> Sim for Model<f32, S, N, D> {
@@ -147,6 +152,152 @@ impl<S: Scene, const N: usize, const D: usize> Sim for ModifiedNewton<Model<f32,
 
     fn state_words(&self, f: &mut dyn FnMut(u32)) {
         self.0.state_words(f)
+    }
+}
+
+/// The model plus an on-device monitor (`Monitor<f32>`: no twin, `MonitorConfig::paper`) that
+/// records after every step. `CAP`, `K`, `W` (rainflow residue, impact log, window blocks)
+/// default to `Monitor`'s own defaults, the ones host-sim's `fatigue` runs with.
+pub struct WithMonitor<M, const CAP: usize = 128, const K: usize = 16, const W: usize = 256> {
+    /// The monitored model.
+    pub model: M,
+    /// The monitor.
+    pub monitor: Monitor<f32, NoTwin, CAP, K, W>,
+    /// Samples `Monitor::record` refused (the model still advanced).
+    pub record_errors: u32,
+}
+
+/// `Monitor::record` behind its own non-inlined function, so its instructions per sample are
+/// counted separately from the model's step (`scripts/embedded-report.sh`).
+#[inline(never)]
+pub fn monitor_record<
+    S: Scene,
+    const N: usize,
+    const D: usize,
+    const CAP: usize,
+    const K: usize,
+    const W: usize,
+>(
+    monitor: &mut Monitor<f32, NoTwin, CAP, K, W>,
+    model: &Model<f32, S, N, D>,
+    report: &StepReport<f32>,
+    base_accel: f32,
+) -> Result<f32, Error> {
+    monitor.record(model, report, base_accel)
+}
+
+impl<S: Scene, const N: usize, const D: usize, const CAP: usize, const K: usize, const W: usize> Sim
+    for WithMonitor<Model<f32, S, N, D>, CAP, K, W>
+{
+    fn name() -> &'static str {
+        "free ball + monitor"
+    }
+
+    fn init() -> Result<Self, Error> {
+        let p = Params::default();
+        let model = Model::at_rest(p, 0.0)?;
+        let monitor = Monitor::new(MonitorConfig::paper(&p)?, &model)?;
+        Ok(WithMonitor {
+            model,
+            monitor,
+            record_errors: 0,
+        })
+    }
+
+    /// Model step, then `Monitor::record` (not after a failed step: the state did not move).
+    #[inline(never)]
+    fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
+        let r = Model::step(&mut self.model, base_accel)?;
+        if monitor_record(&mut self.monitor, &self.model, &r, base_accel).is_err() {
+            self.record_errors = self.record_errors.saturating_add(1);
+        }
+        Ok(r)
+    }
+
+    fn h(&self) -> f32 {
+        self.model.h()
+    }
+
+    fn tip(&self) -> f32 {
+        self.model.tip()
+    }
+
+    fn ball(&self) -> f32 {
+        self.model.ball()
+    }
+
+    fn static_tip(&self) -> f32 {
+        self.model.static_tip()
+    }
+
+    /// The model's state, then what `record` changed: stress, closed-cycle Miner damage, cycle
+    /// count and largest range, rainflow reversals, residue length and overflows, samples,
+    /// rejections, impacts logged and refused records.
+    fn state_words(&self, f: &mut dyn FnMut(u32)) {
+        self.model.state_words(f);
+        let m = &self.monitor;
+        let miner = m.miner();
+        f(m.root_stress().to_bits());
+        f(miner.damage().to_bits());
+        f(miner.cycles().to_bits());
+        f(miner.max_range().to_bits());
+        let rev = m.rainflow().reversals();
+        f(rev as u32);
+        f((rev >> 32) as u32);
+        f(m.rainflow().residue_len() as u32);
+        f(m.rainflow().overflows());
+        f(m.samples() as u32);
+        f(m.rejected());
+        f(m.impacts().total());
+        f(self.record_errors);
+    }
+
+    /// Fatigue with the residue (as if the history ended now) and the window indicators.
+    fn second(&self, out: &mut dyn Write, f: &mut dyn FnMut(u32)) {
+        let m = &self.monitor;
+        let fat = m.fatigue();
+        let v = m.indicators();
+        for x in [
+            m.root_stress(),
+            fat.damage,
+            fat.equivalent_range,
+            fat.cycles,
+            fat.max_range,
+            v.tip_rms,
+            v.tip_peak,
+            v.ball_rms,
+            v.beam_energy,
+            v.ball_energy,
+        ] {
+            f(x.to_bits());
+        }
+        let _ = writeln!(
+            out,
+            "  monitor stress={} damage={} S_eq={} cycles={} max_range={}",
+            F(m.root_stress()),
+            F(fat.damage),
+            F(fat.equivalent_range),
+            F(fat.cycles),
+            F(fat.max_range)
+        );
+        let _ = writeln!(
+            out,
+            "  monitor tip_rms={} tip_peak={} ball_rms={} beam_energy={} ball_energy={}",
+            F(v.tip_rms),
+            F(v.tip_peak),
+            F(v.ball_rms),
+            F(v.beam_energy),
+            F(v.ball_energy)
+        );
+        let _ = writeln!(
+            out,
+            "  monitor residue={} overflows={} impacts={} rejected={} record_errors={}",
+            m.rainflow().residue_len(),
+            m.rainflow().overflows(),
+            m.impacts().total(),
+            m.rejected(),
+            self.record_errors
+        );
     }
 }
 
@@ -325,6 +476,7 @@ pub fn run<M: Sim, W: Write, P: Probe>(m: &mut M, out: &mut W, probe: &mut P) ->
                 on_line = 0;
             }
             let _ = writeln!(out, "k={k} tip={} ball={}", F(m.tip()), F(m.ball()));
+            m.second(out, &mut |w| hash.word(w));
         }
     }
     if on_line != 0 {

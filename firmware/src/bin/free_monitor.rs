@@ -1,0 +1,19 @@
+//! `fw-free-monitor`: `fw-free` plus the on-device monitor (`Monitor<f32>`, no twin,
+//! `MonitorConfig::paper`, CAP 128, K 16, W 256) recording after every step.
+//!
+//! On `thumbv7em-none-eabihf` this is the firmware; on the host it prints the reference.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+type M = absorber_firmware::WithMonitor<absorber_core::FreeBallModel<f32, 3, 13>>;
+
+#[cfg(target_os = "none")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    static mut MODEL: core::mem::MaybeUninit<M> = core::mem::MaybeUninit::uninit();
+    absorber_firmware::target::target_main::<M>(MODEL)
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    absorber_firmware::host_main::<M>()
+}
