@@ -186,8 +186,14 @@ pub fn monitor_record<
     monitor.record(model, report, base_accel)
 }
 
-impl<S: Scene, const N: usize, const D: usize, const CAP: usize, const K: usize, const W: usize> Sim
-    for WithMonitor<Model<f32, S, N, D>, CAP, K, W>
+impl<
+        S: Scene,
+        const N: usize,
+        const D: usize,
+        const CAP: usize,
+        const K: usize,
+        const W: usize,
+    > Sim for WithMonitor<Model<f32, S, N, D>, CAP, K, W>
 {
     fn name() -> &'static str {
         "free ball + monitor"
