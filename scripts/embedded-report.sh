@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Regenerates the measured sections of docs/embedded.md: instructions per `step` (exact, QEMU
 # TCG plugin), a cycle/µs estimate, flash and RAM of the model, the stack high-water mark of
-# `step`, and the panic/heap check of the step path, for the free-ball, beam-only and
-# locked-ball scenes.
+# `step`, and the panic/heap check of the step path, for the free-ball (full and modified
+# Newton, and with the on-device monitor, whose `Monitor::record` is also counted on its own),
+# beam-only and locked-ball scenes.
 #
 # Usage: scripts/embedded-report.sh          (needs what .ci/embedded.sh installs, plus gcc and python3)
 set -euo pipefail
@@ -31,8 +32,26 @@ qemu() {
         -semihosting-config enable=on,target=native "$@"
 }
 
+# count_calls <elf> <stem> <hash> <nm -C pattern of the function> <suffix>: runs the firmware
+# under the plugin, counting the instructions of every call of the one function whose demangled
+# name matches, from its entry to the return address of any of its `bl` call sites.
+count_calls() {
+    local elf=$1 stem=$2 hash=$3 pattern=$4 sfx=$5 entry rets site
+    entry=$(awk -v p="$pattern" '$0 ~ p {print "0x" $1}' "$stem.nm" | sed 's/^0x0*/0x/')
+    [ -n "$entry" ] || { echo "embedded-report: no symbol matching '$pattern' in $elf"; exit 1; }
+    [ "$(wc -w <<<"$entry")" = 1 ] || { echo "embedded-report: several symbols match '$pattern' in $elf"; exit 1; }
+    rets=""
+    for site in $(awk -v e="${entry#0x}" '$2 == "bl" && $3 == e {sub(":", "", $1); print $1}' "$stem.dis"); do
+        rets+=$(printf ',ret=0x%x' $((0x$site + 4)))   # bl is a 32-bit instruction
+    done
+    [ -n "$rets" ] || { echo "embedded-report: no call of '$pattern' in $elf"; exit 1; }
+    echo "$entry" >"$stem$sfx.entry"
+    qemu -kernel "$elf" -append "expect=$hash" \
+        -plugin "$work/step-counter.so,entry=$entry$rets,out=$stem$sfx.counts,prof=$stem$sfx.prof" >"$stem$sfx.qemu"
+}
+
 for profile in fw fw-size; do
-    for scene in free free-modified beam locked empty; do
+    for scene in free free-modified free-monitor beam locked empty; do
         elf=$tdir/$target/$profile/fw-$scene
         stem=$work/$profile-$scene
         "$tdir/release/fw-$scene" >"$stem.host"
@@ -41,17 +60,12 @@ for profile in fw fw-size; do
         arm-none-eabi-size -A "$elf" >"$stem.size"
         [ "$scene" = empty ] && continue
         arm-none-eabi-objdump -d --no-show-raw-insn "$elf" >"$stem.dis"
-        # Entry of the counted function and the return address of each call site.
-        entry=$(awk '/ as absorber_firmware::Sim>::step$/ {print "0x" $1}' "$stem.nm" | sed 's/^0x0*/0x/')
-        [ -n "$entry" ] || { echo "embedded-report: no step symbol in $elf"; exit 1; }
-        rets=""
-        for site in $(awk -v e="${entry#0x}" '$2 == "bl" && $3 == e {sub(":", "", $1); print $1}' "$stem.dis"); do
-            rets+=$(printf ',ret=0x%x' $((0x$site + 4)))   # bl is a 32-bit instruction
-        done
-        [ -n "$rets" ] || { echo "embedded-report: no call of step in $elf"; exit 1; }
-        echo "$entry" >"$stem.entry"
-        qemu -kernel "$elf" -append "expect=$hash" \
-            -plugin "$work/step-counter.so,entry=$entry$rets,out=$stem.counts,prof=$stem.prof" >"$stem.qemu"
+        # Instructions of every call of `Sim::step` -> $stem.{entry,counts,prof,qemu}.
+        count_calls "$elf" "$stem" "$hash" ' as absorber_firmware::Sim>::step$' ""
+        # The monitor's share of the step, counted on its own -> $stem.record.{entry,counts,prof,qemu}.
+        if [ "$scene" = free-monitor ]; then
+            count_calls "$elf" "$stem" "$hash" ' absorber_firmware::monitor_record$' .record
+        fi
         qemu -kernel "$elf" -append "expect=$hash stack" >"$stem.stack"
     done
 done
