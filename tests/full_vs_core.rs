@@ -297,3 +297,70 @@ fn f32_core_agrees_with_full_solver_within_newton_tolerance() {
         assert!(worst <= tol_l(&p), "{worst:e}");
     }
 }
+
+/// Zero gravity: both solvers pin the free ball plumb during the static solve (the ball's own
+/// equation is singular at g = 0), so the equilibrium is the straight beam, exactly; driven at
+/// 4.13 Hz (5 mm, no gravity to hold the ball) they then agree step by step until the first
+/// impact.
+#[test]
+fn zero_gravity_static_is_straight_and_the_solvers_agree() {
+    let p = Params::<f64> {
+        gravity: 0.0,
+        ..Default::default()
+    };
+    let mut c = FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0).expect("core");
+    let mut f = FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0).expect("full");
+    assert_eq!(c.static_tip_deflection(), 0.0);
+    assert_eq!(f.static_tip_deflection(), 0.0);
+    let h = p.integrator.step;
+    let (mut worst, mut amp): (f64, f64) = (0.0, 0.0);
+    for k in 1..=(2.0 / h) as usize {
+        let u = 10.0 * base_accel(4.13, k as f64 * h);
+        let (rc, rf) = (c.step(u).expect("core"), f.step(u).expect("full"));
+        if rc.impact.is_some() || rf.impact.is_some() {
+            break;
+        }
+        worst = worst.max((c.tip_deflection() - f.tip_deflection()).abs());
+        amp = amp.max(c.tip_deflection().abs());
+    }
+    println!("g = 0: max |Δy_tip| = {worst:.3e} m (amplitude {amp:.3e} m)");
+    assert!(amp > 1e-3, "the beam is driven: {amp:e}");
+    assert!(worst <= 0.01 * tol_l(&p), "{worst:e}");
+}
+
+/// A slender beam whose end tilts beyond the stop under its own weight: both solvers reach
+/// the equilibrium by adaptive load stepping and reject it with the same parameter error; a
+/// beam twice as thin (end tilt 43°, inside the ±65° stops) is solved by both, to the same
+/// deflection.
+#[test]
+fn slender_beams_static_agree_or_fail_with_the_same_error() {
+    let thin = |f: f64| {
+        let mut p = Params::<f64>::default();
+        p.beam.inertia /= f * f;
+        p.beam.area /= f;
+        p.beam.mass /= f;
+        p
+    };
+    let p = thin(2.0);
+    let c = FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0).expect("core");
+    let f = FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0).expect("full");
+    let (yc, yf) = (c.static_tip_deflection(), f.static_tip_deflection());
+    println!("I/4: static tip {yc:.6e} (core) vs {yf:.6e} (full)");
+    assert!(yc < -0.05, "large deflection: {yc}");
+    assert!((yc - yf).abs() <= 0.01 * tol_l(&p), "{yc} vs {yf}");
+    let p = thin(10.0);
+    let field = |e: absorber_core::Error| match e {
+        absorber_core::Error::InvalidParameter { field, .. } => field,
+        other => panic!("expected a parameter error, got {other:?}"),
+    };
+    let ec = match FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0) {
+        Ok(_) => panic!("core must fail"),
+        Err(e) => e,
+    };
+    let ef = match FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0) {
+        Ok(_) => panic!("full must fail"),
+        Err(e) => e,
+    };
+    assert_eq!(field(ec), "ball.stop_angle");
+    assert_eq!(field(ef), "ball.stop_angle");
+}

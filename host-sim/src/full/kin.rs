@@ -11,6 +11,7 @@
 //! c₄   = |R_b − r_A| − ρ                 (ball centre on the circle of radius ρ about A)
 //! c₅   = r_b φ − R_tr ψ + ρ θ            (no slip; θ = angle of R_b − r_A from −y)
 //! c₆   = θ − ψ − α_lock                  (ball held: locked scene, or resting on a stop)
+//! c₆′  = θ                               (static solve of a free ball: pinned plumb)
 //! ```
 //!
 //! For each one: value, gradient `∂c/∂w` and the quadratic term `ẇᵀ (∂²c/∂w²) ẇ`, so that
@@ -44,6 +45,10 @@ pub enum Mode {
     Free,
     /// Ball held at relative angle α_lock: c₁…c₆; φ is dependent.
     Held(f64),
+    /// Static solve of a free ball: c₁…c₅ and c₆′ (θ = 0, plumb); φ is dependent. The plumb
+    /// position is an equilibrium for any gravity (the only stable one for g > 0); with g = 0
+    /// the free ball's own equation would be singular. Mirrors the core's `BallMode::Plumb`.
+    Plumb,
 }
 
 impl Mode {
@@ -53,7 +58,7 @@ impl Mode {
             Mode::Beam => 0,
             Mode::Tip => 3,
             Mode::Free => 5,
-            Mode::Held(_) => 6,
+            Mode::Held(_) | Mode::Plumb => 6,
         }
     }
 
@@ -63,7 +68,7 @@ impl Mode {
             Mode::Beam => &[],
             Mode::Tip => &[RT1, RT2, PSI],
             Mode::Free => &[RT1, RT2, PSI, RB1, RB2],
-            Mode::Held(_) => &[RT1, RT2, PSI, PHI, RB1, RB2],
+            Mode::Held(_) | Mode::Plumb => &[RT1, RT2, PSI, PHI, RB1, RB2],
         }
     }
 
@@ -185,9 +190,15 @@ impl Bodies {
         c.grad[4][0] = -self.rho * tx;
         c.grad[4][1] = -self.rho * ty;
         c.quad[4] = self.rho * tq;
-        if let Mode::Held(lock) = mode {
-            c.val[5] = theta - w[PSI] - lock;
-            c.grad[5][PSI] = -1.0;
+        let held = match mode {
+            Mode::Held(lock) => Some((lock, 1.0)),
+            Mode::Plumb => Some((0.0, 0.0)),
+            _ => None,
+        };
+        if let Some((lock, tilt)) = held {
+            // c₆ = θ − ψ − α_lock (held), c₆′ = θ (plumb).
+            c.val[5] = theta - tilt * w[PSI] - lock;
+            c.grad[5][PSI] = -tilt;
             c.grad[5][RB1] = tx;
             c.grad[5][RB2] = ty;
             c.grad[5][0] = -tx;
@@ -262,38 +273,39 @@ mod tests {
             0.01, -0.02, -0.03, -0.1, 0.37, -0.04, -0.09, 1.3, 0.38, -0.05,
         ];
         let wd = [0.1, -0.3, 0.2, 0.5, -0.1, 0.2, 0.7, -3.0, 0.4, -0.6];
-        let mode = Mode::Held(0.2);
-        let c = b.constraints(&w, &wd, mode, 0.0);
-        let h = 1e-6;
-        for k in 0..mode.m() {
-            for j in 0..NW {
+        for mode in [Mode::Held(0.2), Mode::Plumb] {
+            let c = b.constraints(&w, &wd, mode, 0.0);
+            let h = 1e-6;
+            for k in 0..mode.m() {
+                for j in 0..NW {
+                    let (mut wp, mut wm) = (w, w);
+                    wp[j] += h;
+                    wm[j] -= h;
+                    let fd = (b.constraints(&wp, &wd, mode, 0.0).val[k]
+                        - b.constraints(&wm, &wd, mode, 0.0).val[k])
+                        / (2.0 * h);
+                    assert!(
+                        (fd - c.grad[k][j]).abs() < 1e-7,
+                        "c{k} w{j}: {fd} vs {}",
+                        c.grad[k][j]
+                    );
+                }
+                // d/dt (grad · wd) along w + t wd = wdᵀ H wd.
                 let (mut wp, mut wm) = (w, w);
-                wp[j] += h;
-                wm[j] -= h;
-                let fd = (b.constraints(&wp, &wd, mode, 0.0).val[k]
-                    - b.constraints(&wm, &wd, mode, 0.0).val[k])
+                for j in 0..NW {
+                    wp[j] += h * wd[j];
+                    wm[j] -= h * wd[j];
+                }
+                let dot = |g: &[f64; NW]| g.iter().zip(wd.iter()).map(|(a, b)| a * b).sum::<f64>();
+                let fd = (dot(&b.constraints(&wp, &wd, mode, 0.0).grad[k])
+                    - dot(&b.constraints(&wm, &wd, mode, 0.0).grad[k]))
                     / (2.0 * h);
                 assert!(
-                    (fd - c.grad[k][j]).abs() < 1e-7,
-                    "c{k} w{j}: {fd} vs {}",
-                    c.grad[k][j]
+                    (fd - c.quad[k]).abs() < 1e-5 * (1.0 + fd.abs()),
+                    "quad c{k}: {fd} vs {}",
+                    c.quad[k]
                 );
             }
-            // d/dt (grad · wd) along w + t wd = wdᵀ H wd.
-            let (mut wp, mut wm) = (w, w);
-            for j in 0..NW {
-                wp[j] += h * wd[j];
-                wm[j] -= h * wd[j];
-            }
-            let dot = |g: &[f64; NW]| g.iter().zip(wd.iter()).map(|(a, b)| a * b).sum::<f64>();
-            let fd = (dot(&b.constraints(&wp, &wd, mode, 0.0).grad[k])
-                - dot(&b.constraints(&wm, &wd, mode, 0.0).grad[k]))
-                / (2.0 * h);
-            assert!(
-                (fd - c.quad[k]).abs() < 1e-5 * (1.0 + fd.abs()),
-                "quad c{k}: {fd} vs {}",
-                c.quad[k]
-            );
         }
     }
 }

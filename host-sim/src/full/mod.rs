@@ -767,10 +767,16 @@ impl FullSolver {
         Ok(s)
     }
 
-    /// Static equilibrium under gravity by load stepping (4 steps); sets the state to it.
+    /// Static equilibrium under gravity by adaptive load stepping (the core's schedule: load
+    /// steps of at most g/4, halved on failure down to g/1024, doubled after a success); a free
+    /// ball is pinned plumb ([`Mode::Plumb`]) during the solve. Sets the state to it.
     pub fn solve_static(&mut self) -> Result<u32, Error> {
-        const LOAD_STEPS: usize = 4;
-        let mode = self.mode(Contact::Off);
+        const QUARTER: f64 = 0.25;
+        const SMALLEST: f64 = 1.0 / 1024.0;
+        let mode = match self.mode(Contact::Off) {
+            Mode::Free => Mode::Plumb,
+            m => m,
+        };
         let ni = self.n_ind(mode);
         let z = vec![0.0; ni];
         let ch = Chain {
@@ -780,21 +786,32 @@ impl FullSolver {
         };
         let mut x = z.clone();
         let mut warm = self.local_of(&self.state.q);
+        let (mut done, mut step) = (0.0, QUARTER);
         let mut iterations = 0;
-        for k in 1..=LOAD_STEPS {
-            let g = self.params.gravity * k as f64 / LOAD_STEPS as f64;
-            let s = self.newton(&z, &z, &z, x, &ch, 1.0, g, mode, &mut warm, 0.0)?;
-            x = s.x;
-            iterations += s.iterations;
+        while done < 1.0 {
+            let target = f64::min(done + step, 1.0);
+            let g = self.params.gravity * target;
+            let mut trial = warm;
+            match self.newton(&z, &z, &z, x.clone(), &ch, 1.0, g, mode, &mut trial, 0.0) {
+                Ok(s) => {
+                    x = s.x;
+                    warm = trial;
+                    iterations += s.iterations;
+                    done = target;
+                    step = f64::min(2.0 * step, QUARTER);
+                }
+                Err(e) => {
+                    step *= 0.5;
+                    if step < SMALLEST {
+                        return Err(e);
+                    }
+                }
+            }
         }
         let mut seed = self.state.clone();
-        seed.q = {
-            let mut q = seed.q.clone();
-            for j in 4..4 + self.n_body {
-                q[self.zloc(j)] = warm[j];
-            }
-            q
-        };
+        for (j, w) in warm.iter().enumerate().skip(4).take(self.n_body) {
+            seed.q[self.zloc(j)] = *w;
+        }
         let st = self.complete(&x, &z, &z, mode, &seed, 0.0, 0.0, Contact::Off)?;
         self.equilibrium = st.clone();
         self.state = st;
@@ -811,6 +828,12 @@ impl FullSolver {
         s.contact = Contact::Off;
         let mode = self.mode(Contact::Off);
         if mode == Mode::Free {
+            if self.scene.stops() && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
+                return Err(Error::InvalidParameter {
+                    field: "ball.stop_angle",
+                    reason: "the beam end tilts beyond the stop at static equilibrium (a start with the ball resting on a stop is not supported)",
+                });
+            }
             // Rotate the ball by the initial angle at fixed housing: by c₅, δφ = −(ρ/r_b) δθ.
             let phi = self.zloc(PHI);
             s.q[phi] -= self.params.ball.initial_angle * self.bodies.rho / self.bodies.rb;

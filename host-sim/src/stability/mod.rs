@@ -1100,14 +1100,6 @@ pub fn matrix(length: Length) -> Vec<Case> {
             c.expect = Expect::Error("integrator.tolerance");
             c.note = "tolerance 1.1e-8 is below what f32 resolves (8 ε ≈ 9.5e-7): parameter error naming the field";
         }
-        if c.engine == F && c.params.gravity == 0.0 {
-            c.known_issue =
-                Some("full solver: static solve singular at g = 0 (ball not pinned plumb)");
-        }
-        if c.engine == F && c.expect == Expect::Error("ball.stop_angle") {
-            c.known_issue =
-                Some("full solver: no adaptive load stepping, so no clear `ball.stop_angle` error");
-        }
         if c.name.starts_with("amplitude 50 mm") && f32_core {
             c.known_issue = Some("core f32: Newton diverges (increment 1.75) in a stop-impact step at 3.4 g, where f64 converges");
         }
