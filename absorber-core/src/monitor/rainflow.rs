@@ -244,7 +244,7 @@ impl<T: Real, const CAP: usize> Rainflow<T, CAP> {
             if n == 3 {
                 // Y contains the starting point: ½ cycle, discard the first point.
                 sink(Cycle::of(x1, x2, false));
-                self.stack.remove(0);
+                self.drop_points(0, 1);
             } else {
                 // One cycle; discard the peak and the valley of Y.
                 sink(Cycle::of(x1, x2, true));
@@ -265,9 +265,31 @@ impl<T: Real, const CAP: usize> Rainflow<T, CAP> {
             mean: (p2 + p3) * lit::<T>(0.5),
             full: true,
         });
-        self.stack.remove(3);
-        self.stack.remove(2);
+        self.drop_points(2, 2);
         self.overflows += 1;
+    }
+
+    /// Removes the `count` points starting at `at`, keeping the order of the rest (as
+    /// `Vec::remove` would, without its assertion): the later points move down through checked
+    /// accesses, then the stack is truncated. Nothing happens if the range is not inside the
+    /// stack. O(CAP), no panic path.
+    fn drop_points(&mut self, at: usize, count: usize) {
+        let n = self.stack.len();
+        let Some(keep) = n.checked_sub(count) else {
+            return;
+        };
+        if at > keep {
+            return;
+        }
+        let pts = self.stack.as_mut_slice();
+        for i in at..keep {
+            if let Some(&p) = pts.get(i + count) {
+                if let Some(slot) = pts.get_mut(i) {
+                    *slot = p;
+                }
+            }
+        }
+        self.stack.truncate(keep);
     }
 
     /// Counts the residue *as if the history ended now*: the pending point goes through the
