@@ -8,9 +8,9 @@
 use crate::ancf::ElementVector;
 use crate::beam::gather;
 use crate::model::{Model, State};
+use crate::outputs::Angles;
 use crate::scalar::{lit, Real};
-use crate::scene::{BallKind, Scene};
-use crate::tip;
+use crate::scene::Scene;
 
 /// Energies of the bodies \[J\].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,41 +45,64 @@ impl<T: Real> Energies<T> {
 }
 
 /// Heights (relative to the base) of the mass centres: (∫μ y dx, y_B tip, y_D ball).
-struct Heights<T> {
+///
+/// Those of the static equilibrium are constant for a run: [`Model::energies`] computes them
+/// on every call, a caller evaluating energies at every sample (the monitor) keeps them from
+/// [`Model::equilibrium_heights`] and calls [`Model::energies_about`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Heights<T> {
     beam: T,
     tip: T,
     ball: T,
 }
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
-    fn heights(&self, s: &State<T, D>) -> Heights<T> {
+    /// Heights of configuration `q` with its angles `ang` and `cos_theta` = cos θ (ignored
+    /// without a ball).
+    fn heights(&self, q: &nalgebra::SVector<T, D>, ang: &Angles<T>, cos_theta: T) -> Heights<T> {
         let mut beam = T::zero();
         let unit = self.beam.element.gravity_force(T::one());
         for k in 0..N {
             // ∫ μ y dx = −Q_f(g = 1) · u (eq. 17).
-            beam -= unit.dot(&gather(&s.q, k));
+            beam -= unit.dot(&gather(q, k));
         }
-        let x = Self::local(&s.q, &s.v, &s.a);
-        let (psi, _) = tip::psi_and_rate(&x);
-        let y_a = x.q[1];
-        let tip = y_a - self.params.tip.offset * psi.cos();
-        let (theta, _) = self.orbit_of(s);
-        let ball = y_a - self.params.ball.path_radius() * theta.cos();
+        let y_a = q.get(4 * N - 3).copied().unwrap_or(T::zero());
+        let tip = y_a - self.params.tip.offset * ang.cos_psi;
+        let ball = y_a - self.params.ball.path_radius() * cos_theta;
         Heights { beam, tip, ball }
     }
 
-    /// Orbit angle θ and rate of a state (= ψ for a locked ball).
-    pub(crate) fn orbit_of(&self, s: &State<T, D>) -> (T, T) {
-        let x = Self::local(&s.q, &s.v, &s.a);
-        match S::BALL {
-            BallKind::Free => tip::orbit_angle(&self.inertia, &x),
-            _ => tip::psi_and_rate(&x),
-        }
+    /// Heights of the static equilibrium the run started from.
+    pub(crate) fn equilibrium_heights(&self) -> Heights<T> {
+        let s = State {
+            q: self.equilibrium,
+            ..self.state
+        };
+        let ang = self.angles_of(&s);
+        let cos_theta = ang.theta_sin_cos().map_or(T::one(), |(_, cos)| cos);
+        self.heights(&s.q, &ang, cos_theta)
     }
 
     /// Energies of the current state, for the base moving at `base_velocity` \[m/s\] and
     /// displaced by `base_displacement` \[m\].
     pub fn energies(&self, base_velocity: T, base_displacement: T) -> Energies<T> {
+        self.energies_about(
+            &self.equilibrium_heights(),
+            base_velocity,
+            base_displacement,
+        )
+        .0
+    }
+
+    /// [`Model::energies`] with the static heights `eq` given ([`Model::equilibrium_heights`]),
+    /// and the angles of the current state it used. Transcendental calls: `atan2` for ψ (and
+    /// for θ of a free ball), one `sin_cos` of θ; cos ψ and sin ψ come from the end slope.
+    pub(crate) fn energies_about(
+        &self,
+        eq: &Heights<T>,
+        base_velocity: T,
+        base_displacement: T,
+    ) -> (Energies<T>, Angles<T>) {
         let s = &self.state;
         let g = self.params.gravity;
         let half = lit::<T>(0.5);
@@ -102,38 +125,34 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             v[5] += base_velocity;
             e.beam_kinetic += half * v.dot(&(self.beam.mass * v));
         }
-        let now = self.heights(s);
-        let eq_state = State {
-            q: self.equilibrium,
-            ..*s
-        };
-        let eq = self.heights(&eq_state);
+        let ang = self.angles_of(s);
+        let (sin_theta, cos_theta) = ang.theta_sin_cos().unwrap_or((z, T::one()));
+        let now = self.heights(&s.q, &ang, cos_theta);
         e.beam_potential = g * (now.beam - eq.beam + self.params.beam.mass * base_displacement);
         if S::HAS_TIP {
-            let x = Self::local(&s.q, &s.v, &s.a);
-            let (psi, rate) = tip::psi_and_rate(&x);
-            let (xd, yd) = (x.v[0], x.v[1] + base_velocity);
+            let rate = ang.psi_rate;
+            let xd = s.v.get(4 * N - 4).copied().unwrap_or(z);
+            let yd = s.v.get(4 * N - 3).copied().unwrap_or(z) + base_velocity;
             let p = &self.params.tip;
             let (vx, vy) = (
-                xd + p.offset * rate * psi.cos(),
-                yd + p.offset * rate * psi.sin(),
+                xd + p.offset * rate * ang.cos_psi,
+                yd + p.offset * rate * ang.sin_psi,
             );
             e.tip_kinetic = half * (p.mass * (vx * vx + vy * vy) + p.inertia * rate * rate);
             e.tip_potential = g * p.mass * (now.tip - eq.tip + base_displacement);
-            if !matches!(S::BALL, BallKind::None) {
+            if let Some((_, theta_rate)) = ang.theta {
                 let b = &self.params.ball;
                 let rho = b.path_radius();
-                let (theta, theta_rate) = self.orbit_of(s);
                 let (vx, vy) = (
-                    xd + rho * theta_rate * theta.cos(),
-                    yd + rho * theta_rate * theta.sin(),
+                    xd + rho * theta_rate * cos_theta,
+                    yd + rho * theta_rate * sin_theta,
                 );
                 let spin = ((rho + b.radius) * rate - rho * theta_rate) / b.radius;
                 e.ball_kinetic = half * (b.mass * (vx * vx + vy * vy) + b.inertia * spin * spin);
                 e.ball_potential = g * b.mass * (now.ball - eq.ball + base_displacement);
             }
         }
-        e
+        (e, ang)
     }
 
     /// Beam strain energy of an arbitrary displacement vector (for tests and reports) \[J\].

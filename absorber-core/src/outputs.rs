@@ -1,11 +1,78 @@
 //! What firmware reads back after a step.
 
-use crate::model::Model;
+use crate::model::{Model, State};
 use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
-use crate::tip;
+use crate::tip::{self, LocalState};
+
+/// The angles of one state, each evaluated once: ψ and ψ̇ of the end slope, cos ψ and sin ψ
+/// taken from the slope vector itself, `(a₃, a₄)/|a|` (no trigonometric call; the model's
+/// step does the same), and the ball's orbit angle θ and θ̇ (`None` without a ball; = ψ for a
+/// locked ball). Every output that needs one of them goes through [`Model::angles_of`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Angles<T> {
+    /// ψ \[rad\] (`atan2` of the end slope).
+    pub psi: T,
+    /// ψ̇ \[rad/s\].
+    pub psi_rate: T,
+    /// cos ψ.
+    pub cos_psi: T,
+    /// sin ψ.
+    pub sin_psi: T,
+    /// θ \[rad\] and θ̇ \[rad/s\]; `None` without a ball.
+    pub theta: Option<(T, T)>,
+    /// θ is ψ (locked ball): its cos and sin are those of ψ.
+    theta_is_psi: bool,
+}
+
+impl<T: Real> Angles<T> {
+    /// (sin θ, cos θ): one `sin_cos`, or none for a locked ball (θ = ψ); `None` without a ball.
+    pub fn theta_sin_cos(&self) -> Option<(T, T)> {
+        let (theta, _) = self.theta?;
+        Some(if self.theta_is_psi {
+            (self.sin_psi, self.cos_psi)
+        } else {
+            theta.sin_cos()
+        })
+    }
+
+    /// Ball angle relative to the housing α = θ − ψ and its rate; `None` without a ball.
+    pub fn ball_relative(&self) -> Option<(T, T)> {
+        let (th, thd) = self.theta?;
+        Some((th - self.psi, thd - self.psi_rate))
+    }
+}
+
+/// (cos ψ, sin ψ) of the end slope `a = (1 + u₃, u₄)`: `a / |a|`.
+fn slope_cos_sin<T: Real>(x: &LocalState<T>) -> (T, T) {
+    let a3 = T::one() + x.q[2];
+    let a4 = x.q[3];
+    let len = (a3 * a3 + a4 * a4).sqrt();
+    (a3 / len, a4 / len)
+}
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
+    /// The angles of a state (see [`Angles`]): one `atan2` for ψ, and one more (inside
+    /// [`tip::orbit_angle`]) for the orbit angle of a free ball.
+    pub(crate) fn angles_of(&self, s: &State<T, D>) -> Angles<T> {
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, psi_rate) = tip::psi_and_rate(&x);
+        let (cos_psi, sin_psi) = slope_cos_sin(&x);
+        let theta = match S::BALL {
+            BallKind::None => None,
+            BallKind::Locked => Some((psi, psi_rate)),
+            BallKind::Free => Some(tip::orbit_angle(&self.inertia, &x)),
+        };
+        Angles {
+            psi,
+            psi_rate,
+            cos_psi,
+            sin_psi,
+            theta,
+            theta_is_psi: matches!(S::BALL, BallKind::Locked),
+        }
+    }
+
     /// Vertical deflection of the beam end A relative to the base (includes the static sag) \[m\].
     pub fn tip_deflection(&self) -> T {
         self.state.q.get(4 * N - 3).copied().unwrap_or(T::zero())
@@ -29,18 +96,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// Ball angle θ from the downward vertical \[rad\] and its rate \[rad/s\]; `None` without a
     /// ball. A locked ball moves with the housing (θ = ψ).
     pub fn ball_angle(&self) -> Option<(T, T)> {
-        match S::BALL {
-            BallKind::None => None,
-            BallKind::Locked => Some(self.tip_angle()),
-            BallKind::Free => Some(self.orbit_of(&self.state)),
-        }
+        self.angles_of(&self.state).theta
     }
 
     /// Ball angle relative to the housing α = θ − ψ \[rad\] and its rate; `None` without a ball.
     pub fn ball_relative_angle(&self) -> Option<(T, T)> {
-        let (th, thd) = self.ball_angle()?;
-        let (psi, psid) = self.tip_angle();
-        Some((th - psi, thd - psid))
+        self.angles_of(&self.state).ball_relative()
     }
 
     /// Time since the start \[s\].
@@ -61,11 +122,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         }
         if S::HAS_TIP {
             let y_rate = self.tip_velocity();
-            let (psi, psi_rate) = self.tip_angle();
-            p += self.params.tip.mass * (y_rate + self.params.tip.offset * psi_rate * psi.sin());
-            if let Some((theta, theta_rate)) = self.ball_angle() {
+            let ang = self.angles_of(&self.state);
+            p += self.params.tip.mass
+                * (y_rate + self.params.tip.offset * ang.psi_rate * ang.sin_psi);
+            if let (Some((_, theta_rate)), Some((sin_theta, _))) = (ang.theta, ang.theta_sin_cos())
+            {
                 let rho = self.params.ball.path_radius();
-                p += self.params.ball.mass * (y_rate + rho * theta_rate * theta.sin());
+                p += self.params.ball.mass * (y_rate + rho * theta_rate * sin_theta);
             }
         }
         p

@@ -34,9 +34,13 @@
 //! With the defaults (`CAP = 128, K = 16, W = 256`) and `f32` it is 7.2 kB without a twin
 //! (printed by `tests/monitor_model.rs`). `CAP = 128` holds the converging residue a start-up
 //! transient leaves (about 65 points in the paper scene at 3.70 Hz, see [`rainflow`]).
-//! **Work per sample**: one root moment (element 0's residual for the reaction estimate), the turning-point test, amortized O(1)
-//! rainflow rules (a closed cycle costs one `powf`), one energy evaluation, O(1) window update;
-//! plus one step of the twin if present. Residue and window reads are O(CAP) and O(W).
+//! **Work per sample**: one root moment (row r₂′ of element 0's residual for the reaction
+//! estimate, axial force without its tangent), the turning-point test, amortized O(1) rainflow
+//! rules (a closed cycle costs one `powf`), one energy evaluation (the static strain energy and
+//! heights are kept from the start; ψ by `atan2` with cos ψ, sin ψ from the end slope, one
+//! `sin_cos` of θ, and α from the same angles), O(1) window update; plus one step of the twin if
+//! present. No panic path: the residue and the window are written through checked accesses.
+//! Residue and window reads are O(CAP) and O(W).
 
 pub mod fatigue;
 pub mod impacts;
@@ -53,6 +57,7 @@ pub use stress::{
     RootSection,
 };
 
+use crate::energy::Heights;
 use crate::error::Error;
 use crate::model::{Model, StepReport};
 use crate::params::Params;
@@ -140,7 +145,10 @@ pub struct Monitor<
     impacts: ImpactLog<T, K>,
     window: Indicators<T, Tw::Value, W>,
     twin: Tw,
+    /// Constant for the run, kept so that `record` does not recompute them: the strain energy
+    /// and the heights of the static equilibrium.
     static_strain: T,
+    static_heights: Heights<T>,
     static_stress: T,
     stress: T,
     start_time: T,
@@ -194,6 +202,7 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
             window: Indicators::new(config.block),
             twin,
             static_strain: model.strain_energy_of(model.equilibrium()),
+            static_heights: model.equilibrium_heights(),
             static_stress,
             stress,
             start_time: model.time(),
@@ -234,10 +243,11 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
             self.twin_failures = self.twin_failures.saturating_add(1);
         }
         let z = T::zero();
-        let e = model.energies(z, z);
+        // `Model::energies` with the static heights kept, and the angles it used for α.
+        let (e, angles) = model.energies_about(&self.static_heights, z, z);
         self.window.push(Sample {
             tip: model.tip_deflection() - model.static_tip_deflection(),
-            ball: model.ball_relative_angle().map(|(a, _)| a).unwrap_or(z),
+            ball: angles.ball_relative().map(|(a, _)| a).unwrap_or(z),
             beam_energy: e.beam_strain - self.static_strain + e.beam_kinetic + e.beam_potential,
             ball_energy: e.ball_kinetic + e.ball_potential,
             twin: self.twin.tip(),

@@ -28,8 +28,10 @@
 //!   A virtual rigid rotation δφ about the clamp moves only that coordinate (δr′ = δφ (0, 1)),
 //!   and does no internal work, so `R₃` equals the moment about the clamp of all gravity,
 //!   base-inertia and inertial forces of the discrete model: exact statics to the Newton
-//!   tolerance for any N, and the consistent dynamic moment. Cost: one element residual.
+//!   tolerance for any N, and the consistent dynamic moment. Cost: one row of one element
+//!   residual (the axial force of element 0 without its tangent).
 
+use crate::ancf::{ElementMatrix, ElementVector};
 use crate::beam::gather;
 use crate::error::Error;
 use crate::model::Model;
@@ -145,12 +147,32 @@ fn reaction_moment_at<T: Real, S: Scene, const N: usize, const D: usize>(
     a: &nalgebra::SVector<T, D>,
     base_accel: T,
 ) -> T {
+    // Only row 3 (r₂′ of node 0) of R = M_e ä + K_b(u + c u̇) + Q_l(u) − Q_f(g_eff): the
+    // matrix rows alone, and the axial force without its tangent. Bit-identical to taking
+    // row 3 of the full element residual.
+    const ROW: usize = 3;
     let b = &model.beam;
     let (u, v, a) = (gather(q, 0), gather(v, 0), gather(a, 0));
-    let (axial, _) = b.element.axial_force_and_tangent(&u);
+    let at = |x: &ElementVector<T>| x.get(ROW).copied().unwrap_or(T::zero());
     let g_eff = model.params().gravity + base_accel;
-    let r = b.mass * a + b.stiffness * (u + v * b.damping) + axial - b.element.gravity_force(g_eff);
-    -r.get(3).copied().unwrap_or(T::zero())
+    let r = row_times(&b.mass, ROW, &a)
+        + row_times(&b.stiffness, ROW, &(u + v * b.damping))
+        + at(&b.element.axial_force(&u))
+        - at(&b.element.gravity_force(g_eff));
+    -r
+}
+
+/// Row `i` of `m x`, accumulated column by column as nalgebra's `m * x` does
+/// (`y = m₀ x₀`, then `y = mⱼ xⱼ + y`), so it equals `(m * x)[i]` bit for bit. Starting from
+/// −0 (the exact additive identity) keeps the sign of a zero first product.
+fn row_times<T: Real>(m: &ElementMatrix<T>, i: usize, x: &ElementVector<T>) -> T {
+    let mut y = -T::zero();
+    for (column, xj) in m.column_iter().zip(x.iter()) {
+        if let Some(mij) = column.get(i) {
+            y = *mij * *xj + y;
+        }
+    }
+    y
 }
 
 /// Signed root curvature κ = r″_y at x = 0 of element 0 \[1/m\] (see the module doc).
