@@ -2,11 +2,13 @@
 //! RMS ball angle relative to the housing, mean beam and ball energies, and the absorber
 //! effectiveness against a locked-ball twin.
 //!
-//! The window holds the last `W` **blocks** of `block` samples each (a fixed ring of `W`
-//! blocks, written through checked accesses: no panic path). A block stores the mean square and the peak of each signal over
-//! its samples, so RMS and peak over the window are exact for the `W · block` samples it covers
-//! while the memory is `W` blocks. Per sample the work is O(1); reading the indicators scans the
-//! `W` blocks (O(W)), so read them at a low rate (e.g. once per second).
+//! The window holds the last `W` **blocks** of `block` samples each (a ring in a
+//! [`heapless::Vec`]: filled by `push`, then overwritten oldest first through `get_mut`, so no
+//! access can panic and the storage starts uninitialized). A block stores the mean square and
+//! the peak of each signal over its samples, so RMS and peak over the window are exact for the
+//! `W · block` samples it covers while the memory is `W` blocks. Per sample the work is O(1);
+//! reading the indicators scans the `W` blocks (O(W)), so read them at a low rate (e.g. once
+//! per second).
 //!
 //! - `tip_rms = √(mean (y − y_static)²)`, `tip_peak = max |y − y_static|` \[m\]
 //!   (y = tip deflection relative to the base, y_static = static deflection of the run);
@@ -19,6 +21,7 @@
 //!   it worse.
 
 use crate::scalar::{lit, Real};
+use heapless::Vec;
 
 /// Aggregates of one block of samples. `X` is the twin's share (`()` without a twin).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -114,11 +117,9 @@ pub struct IndicatorValues<T> {
 pub struct Indicators<T, X, const W: usize> {
     block_len: u16,
     current: Block<T, X>,
-    /// Ring of completed blocks: `window[..filled]` are valid (all `W` once it has wrapped),
-    /// the next one goes to `window[next]`.
-    window: [Block<T, X>; W],
+    /// Ring of completed blocks, filled by `push`; once full, `window[next]` is the oldest.
+    window: Vec<Block<T, X>, W>,
     next: usize,
-    filled: usize,
 }
 
 impl<T: Real, X: TwinValue<T>> Block<T, X> {
@@ -142,9 +143,8 @@ impl<T: Real, X: TwinValue<T>, const W: usize> Indicators<T, X, W> {
         Self {
             block_len: block_len.max(1),
             current: Block::zero(),
-            window: [Block::zero(); W],
+            window: Vec::new(),
             next: 0,
-            filled: 0,
         }
     }
 
@@ -171,24 +171,18 @@ impl<T: Real, X: TwinValue<T>, const W: usize> Indicators<T, X, W> {
         }
     }
 
-    /// Writes a completed block over the oldest one (O(1); `get_mut`, so no bounds check can
-    /// panic, and `next < W` always holds).
+    /// Appends a completed block, or once the window is full writes it over the oldest one
+    /// (O(1); `push` and `get_mut` cannot panic).
     fn store(&mut self, block: Block<T, X>) {
-        if let Some(slot) = self.window.get_mut(self.next) {
-            *slot = block;
+        if let Err(block) = self.window.push(block) {
+            if let Some(slot) = self.window.get_mut(self.next) {
+                *slot = block;
+            }
             self.next += 1;
             if self.next >= W {
                 self.next = 0;
             }
-            if self.filled < W {
-                self.filled += 1;
-            }
         }
-    }
-
-    /// The completed blocks in storage order (not time order; sums do not care).
-    fn blocks(&self) -> &[Block<T, X>] {
-        self.window.get(..self.filled).unwrap_or(&[])
     }
 
     /// The indicators over the completed blocks in the window (O(W)).
@@ -197,7 +191,8 @@ impl<T: Real, X: TwinValue<T>, const W: usize> Indicators<T, X, W> {
         let (mut n, mut tip, mut peak, mut ball, mut be, mut bb) = (0u32, z, z, z, z, z);
         let mut twin = X::zero();
         let mut twin_sum = z;
-        for b in self.blocks() {
+        // Storage order, not time order (sums do not care).
+        for b in self.window.as_slice() {
             n += u32::from(b.samples);
             tip += b.tip_sq;
             if b.tip_peak > peak {
