@@ -258,7 +258,14 @@ impl<T: Real> Element<T> {
 
     /// Bending strain energy `½ uᵀ K_t u` \[J\].
     pub fn bending_energy(&self, u: &ElementVector<T>) -> T {
-        lit::<T>(0.5) * u.dot(&(self.bending_stiffness() * u))
+        Self::bending_energy_with(&self.bending_stiffness(), u)
+    }
+
+    /// [`Element::bending_energy`] with `K_t` given: `stiffness` must be this element's
+    /// [`Element::bending_stiffness`], computed once (as [`crate::beam::Beam`] keeps it) instead
+    /// of at every call. Same result bit for bit.
+    pub fn bending_energy_with(stiffness: &ElementMatrix<T>, u: &ElementVector<T>) -> T {
+        lit::<T>(0.5) * u.dot(&(stiffness * u))
     }
 }
 

@@ -5,7 +5,7 @@
 //! base displacement y_b. Pass `base_velocity = base_displacement = 0` for the energies in the
 //! frame moving with the base. The beam strain energy is the total (static part included).
 
-use crate::ancf::ElementVector;
+use crate::ancf::{Element, ElementVector};
 use crate::beam::gather;
 use crate::model::{Model, State};
 use crate::outputs::Angles;
@@ -118,8 +118,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         };
         for k in 0..N {
             let u = gather(&s.q, k);
-            e.beam_strain +=
-                self.beam.element.axial_energy(&u) + self.beam.element.bending_energy(&u);
+            e.beam_strain += self.beam.element.axial_energy(&u)
+                + Element::bending_energy_with(&self.beam.stiffness, &u);
             let mut v = gather(&s.v, k);
             v[1] += base_velocity;
             v[5] += base_velocity;
@@ -160,7 +160,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let mut u_total = T::zero();
         for k in 0..N {
             let u: ElementVector<T> = gather(q, k);
-            u_total += self.beam.element.axial_energy(&u) + self.beam.element.bending_energy(&u);
+            u_total += self.beam.element.axial_energy(&u)
+                + Element::bending_energy_with(&self.beam.stiffness, &u);
         }
         u_total
     }
