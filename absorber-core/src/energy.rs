@@ -116,6 +116,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             ball_kinetic: z,
             ball_potential: z,
         };
+        // By reference: `self.beam.mass * v` would copy the 8×8 matrix (256 bytes in f32).
+        let mass = &self.beam.mass;
         for k in 0..N {
             let u = gather(&s.q, k);
             e.beam_strain += self.beam.element.axial_energy(&u)
@@ -123,7 +125,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             let mut v = gather(&s.v, k);
             v[1] += base_velocity;
             v[5] += base_velocity;
-            e.beam_kinetic += half * v.dot(&(self.beam.mass * v));
+            e.beam_kinetic += half * v.dot(&(mass * v));
         }
         let ang = self.angles_of(s);
         let (sin_theta, cos_theta) = ang.theta_sin_cos().unwrap_or((z, T::one()));
