@@ -96,11 +96,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// Ball angle θ from the downward vertical \[rad\] and its rate \[rad/s\]; `None` without a
     /// ball. A locked ball moves with the housing (θ = ψ).
     pub fn ball_angle(&self) -> Option<(T, T)> {
+        if matches!(S::BALL, BallKind::None) {
+            return None; // (a constant: no angle is computed)
+        }
         self.angles_of(&self.state).theta
     }
 
     /// Ball angle relative to the housing α = θ − ψ \[rad\] and its rate; `None` without a ball.
     pub fn ball_relative_angle(&self) -> Option<(T, T)> {
+        if matches!(S::BALL, BallKind::None) {
+            return None;
+        }
         self.angles_of(&self.state).ball_relative()
     }
 
