@@ -104,9 +104,15 @@ struct Solved<T, const D: usize> {
     increment: T,
 }
 
-/// Largest Newton position step per iteration, in units of the beam length for positions and
-/// in radians for slopes and angles.
-const MAX_STEP: f64 = 0.05;
+/// Trust radius of a Newton correction, in units of the beam length for positions and in
+/// radians for slopes and angles: a correction beyond it is damped ([`Model::damping`]), never
+/// below it. A linearization about a state with a large (transient) axial force can be nearly
+/// singular in bending, and its raw correction would leave the physical range.
+pub const MAX_STEP: f64 = 0.05;
+
+/// Most damping factors tried per Newton iteration (λ = 1, ½, …, 1/2048), each one residual and one
+/// back-substitution: the work per iteration stays bounded.
+pub const DAMPING_TRIALS: u32 = 12;
 
 /// The reduced model of scene `S` with `N` elements and `D = 4N + S::EXTRA_DOFS` unknowns.
 #[derive(Clone, Debug)]
@@ -356,6 +362,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 Some(Some(c)) => !rebuild && c.c_q == ch.c_q && c.contact == contact,
                 _ => false,
             };
+            let mut own: Option<linalg::Lu<T, D>> = None;
             let (dx, fresh) = if reuse {
                 let (r, _) = self.residual_into(&q, &v, &a, g_eff, ch, contact, plumb, None);
                 if !r.iter().all(|z| z.is_finite()) {
@@ -374,12 +381,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 }
                 let lu = linalg::factor(jac).ok_or(Error::Singular)?;
                 let dx = lu.solve(-r).ok_or(Error::Singular)?;
-                if let Some(slot) = cache.as_deref_mut() {
-                    *slot = Some(CachedJacobian {
-                        lu,
-                        c_q: ch.c_q,
-                        contact,
-                    });
+                match cache.as_deref_mut() {
+                    Some(slot) => {
+                        *slot = Some(CachedJacobian {
+                            lu,
+                            c_q: ch.c_q,
+                            contact,
+                        })
+                    }
+                    None => own = Some(lu),
                 }
                 rebuild = false;
                 (dx, true)
@@ -387,19 +397,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             if !dx.iter().all(|z| z.is_finite()) {
                 return Err(Error::Singular);
             }
-            increment = T::zero();
-            for (d, s) in dx.iter().zip(self.scale.iter()) {
-                let e = (*d * c_pos).abs() / *s;
-                if e > increment {
-                    increment = e;
-                }
-            }
-            // Trust region: a linearization about a state with a large (transient) axial force
-            // can be nearly singular in bending, and its raw step would leave the physical
-            // range; cap the step at `MAX_STEP` (scaled units) and keep iterating.
+            increment = self.scaled_norm(&dx, c_pos);
             let cap: T = lit(MAX_STEP);
             if increment > cap {
-                x += dx * (cap / increment);
+                let lu = match (own.as_ref(), cache.as_deref()) {
+                    (Some(l), _) => l,
+                    (None, Some(Some(c))) => &c.lu,
+                    _ => return Err(Error::Singular),
+                };
+                let lambda = self.damping(
+                    q0, v0, a0, &x, &dx, increment, ch, c_pos, g_eff, contact, plumb, lu,
+                );
+                x += dx * lambda;
             } else {
                 x += dx;
             }
@@ -431,6 +440,77 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         })
     }
 
+    /// `max_i |c_pos d_i| / scale_i`: a position increment in scaled units.
+    fn scaled_norm(&self, d: &SVector<T, D>, c_pos: T) -> T {
+        let mut n = T::zero();
+        for (di, s) in d.iter().zip(self.scale.iter()) {
+            let e = (*di * c_pos).abs() / *s;
+            if e > n {
+                n = e;
+            }
+        }
+        n
+    }
+
+    /// Damping factor λ of a Newton correction `dx` larger than the trust radius `MAX_STEP`:
+    /// Deuflhard's affine-invariant natural monotonicity test (Deuflhard 2004, *Newton Methods
+    /// for Nonlinear Problems*, §3.3): accept λ when the simplified correction at `x + λ dx`,
+    /// `−J⁻¹ r(x + λ dx)` with the same factors, is smaller than `(1 − λ/4)` times `dx` (in the
+    /// scaled norm); otherwise halve λ. After [`DAMPING_TRIALS`] trials, or when λ‖dx‖ reaches
+    /// the trust radius [`MAX_STEP`], it takes λ = MAX_STEP/‖dx‖ (the plain trust-region cap).
+    ///
+    /// Why: the plain cap alone limits the whole correction by its largest scaled entry. In a
+    /// violent step (3.4 g at resonance, ball spinning at 85 rad/s) that entry is the ball's
+    /// spin φ, whose linearized response to the beam's correction is ≈ 35 times larger; the beam
+    /// then converged by 5 % per iteration while the spin's target ran away, and Newton failed
+    /// after 100 iterations where the undamped correction converges in 6 (docs/stability.md).
+    #[allow(clippy::too_many_arguments)]
+    fn damping(
+        &self,
+        q0: &SVector<T, D>,
+        v0: &SVector<T, D>,
+        a0: &SVector<T, D>,
+        x: &SVector<T, D>,
+        dx: &SVector<T, D>,
+        norm: T,
+        ch: &Chain<T>,
+        c_pos: T,
+        g_eff: T,
+        contact: Contact,
+        plumb: bool,
+        lu: &linalg::Lu<T, D>,
+    ) -> T {
+        let floor = lit::<T>(MAX_STEP) / norm;
+        let (one, quarter) = (T::one(), lit::<T>(0.25));
+        let mut lambda = one;
+        for _ in 0..DAMPING_TRIALS {
+            if lambda <= floor {
+                break;
+            }
+            let xt = x + dx * lambda;
+            let (r, _) = self.residual_into(
+                &(q0 + xt * ch.c_q),
+                &(v0 + xt * ch.c_v),
+                &(a0 + xt * ch.c_m),
+                g_eff,
+                ch,
+                contact,
+                plumb,
+                None,
+            );
+            if r.iter().all(|z| z.is_finite()) {
+                if let Some(bar) = lu.solve(-r) {
+                    let nb = self.scaled_norm(&bar, c_pos);
+                    if nb <= (one - lambda * quarter) * norm {
+                        return lambda;
+                    }
+                }
+            }
+            lambda *= lit::<T>(0.5);
+        }
+        floor
+    }
+
     /// Static equilibrium under gravity (zero base acceleration), a free ball hanging plumb
     /// below the beam end, by load stepping: gravity in steps of at most a quarter, halved after
     /// a failed solve (down to 1/1024), doubled again after a success. Returns the Newton
@@ -459,7 +539,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 Err(e) => {
                     step *= lit::<T>(0.5);
                     if step < smallest {
-                        return Err(e);
+                        return Err(Self::static_failure(e, self.params.integrator.tolerance));
                     }
                 }
             }
@@ -475,6 +555,22 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             contact: Contact::Off,
         };
         Ok(iterations)
+    }
+
+    /// The error of a static solve that failed at every load step: when Newton ended within a
+    /// few hundred tolerances of convergence it stagnates at the rounding floor of the stiffness
+    /// (condition ∝ N⁴: f32 stalls at 1.2e-4 with 64 elements), which is a tolerance this
+    /// precision cannot meet, not a hard load step.
+    fn static_failure(e: Error, tolerance: T) -> Error {
+        match e {
+            Error::NoConvergence { increment, .. } if increment < 300.0 * to_f64(tolerance) => {
+                Error::InvalidParameter {
+                    field: "integrator.tolerance",
+                    reason: "is below the rounding floor of this precision with this many elements (the static solve stagnates): raise it, use fewer elements or f64",
+                }
+            }
+            e => e,
+        }
     }
 
     /// Restarts the run at time 0 from the static equilibrium, at rest relative to the base, the

@@ -119,8 +119,7 @@ struct Evaluated {
     lambda_local: [f64; MC],
 }
 
-/// Largest Newton step per iteration in scaled units (as the core's trust region).
-const MAX_STEP: f64 = 0.05;
+use absorber_core::model::{DAMPING_TRIALS, MAX_STEP};
 /// Half-bandwidth of the reduced Newton matrix.
 const RED_BW: usize = 7;
 
@@ -687,21 +686,56 @@ impl FullSolver {
             if !lu.solve(&mut dx) {
                 return Err(Error::Singular);
             }
-            increment = 0.0;
-            for (i, d) in dx.iter().enumerate() {
-                increment = f64::max(increment, (d * c_pos).abs() / self.scale(i));
-            }
-            // Ball held on a stop: the core keeps φ as an unknown tied to ψ; count its increment.
-            if let Some(row) = held_spin_row {
-                let dphi: f64 = (0..4).map(|k| ev.kin.bd[row][k] * dx[loc0 + k]).sum();
-                increment = f64::max(increment, (dphi * c_pos).abs());
-            }
+            // Scaled norm; with the ball held on a stop the core keeps φ as an unknown tied to
+            // ψ, so its increment counts too.
+            let norm = |d: &[f64]| {
+                let mut n: f64 = 0.0;
+                for (i, di) in d.iter().enumerate() {
+                    n = n.max((di * c_pos).abs() / self.scale(i));
+                }
+                if let Some(row) = held_spin_row {
+                    let dphi: f64 = (0..4).map(|k| ev.kin.bd[row][k] * d[loc0 + k]).sum();
+                    n = n.max((dphi * c_pos).abs());
+                }
+                n
+            };
+            increment = norm(&dx);
+            // The core's damping (`Model::damping`): natural monotonicity test with the same
+            // factors, λ = 1, ½, … down to the trust-region cap MAX_STEP/‖dx‖.
+            let mut lambda = 1.0;
             if increment > MAX_STEP {
-                let f = MAX_STEP / increment;
-                x.iter_mut().zip(dx.iter()).for_each(|(xi, d)| *xi += d * f);
-            } else {
-                x.iter_mut().zip(dx.iter()).for_each(|(xi, d)| *xi += d);
+                let floor = MAX_STEP / increment;
+                let mut accepted = false;
+                for _ in 0..DAMPING_TRIALS {
+                    if lambda <= floor {
+                        break;
+                    }
+                    let xt: Vec<f64> = (0..ni).map(|i| x[i] + lambda * dx[i]).collect();
+                    let qt: Vec<f64> = (0..ni).map(|i| q0[i] + ch.c_q * xt[i]).collect();
+                    let vt: Vec<f64> = (0..ni).map(|i| v0[i] + ch.c_v * xt[i]).collect();
+                    let at: Vec<f64> = (0..ni).map(|i| a0[i] + ch.c_m * xt[i]).collect();
+                    let mut w = *warm;
+                    if let Ok(et) =
+                        self.evaluate(&qt, &vt, &at, g_eff, mode, &mut w, theta_ref, None)
+                    {
+                        let mut bar: Vec<f64> = et.r.iter().map(|r| -r).collect();
+                        if et.r.iter().all(|z| z.is_finite())
+                            && lu.solve(&mut bar)
+                            && norm(&bar) <= (1.0 - 0.25 * lambda) * increment
+                        {
+                            accepted = true;
+                            break;
+                        }
+                    }
+                    lambda *= 0.5;
+                }
+                if !accepted {
+                    lambda = floor;
+                }
             }
+            x.iter_mut()
+                .zip(dx.iter())
+                .for_each(|(xi, d)| *xi += d * lambda);
             if increment <= tol {
                 return Ok(Solved {
                     x,
