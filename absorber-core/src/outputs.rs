@@ -3,7 +3,7 @@
 use crate::model::{Model, State};
 use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
-use crate::tip::{self, LocalState};
+use crate::tip;
 
 /// The angles of one state, each evaluated once: ψ and ψ̇ of the end slope, cos ψ and sin ψ
 /// taken from the slope vector itself, `(a₃, a₄)/|a|` (no trigonometric call; the model's
@@ -43,21 +43,13 @@ impl<T: Real> Angles<T> {
     }
 }
 
-/// (cos ψ, sin ψ) of the end slope `a = (1 + u₃, u₄)`: `a / |a|`.
-fn slope_cos_sin<T: Real>(x: &LocalState<T>) -> (T, T) {
-    let a3 = T::one() + x.q[2];
-    let a4 = x.q[3];
-    let len = (a3 * a3 + a4 * a4).sqrt();
-    (a3 / len, a4 / len)
-}
-
 impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// The angles of a state (see [`Angles`]): one `atan2` for ψ, and one more (inside
     /// [`tip::orbit_angle`]) for the orbit angle of a free ball.
     pub(crate) fn angles_of(&self, s: &State<T, D>) -> Angles<T> {
         let x = Self::local(&s.q, &s.v, &s.a);
-        let (psi, psi_rate) = tip::psi_and_rate(&x);
-        let (cos_psi, sin_psi) = slope_cos_sin(&x);
+        let rot = tip::tip_rotation(&x);
+        let (psi, psi_rate, cos_psi, sin_psi) = (rot.psi, rot.rate, rot.cos, rot.sin);
         let theta = match S::BALL {
             BallKind::None => None,
             BallKind::Locked => Some((psi, psi_rate)),

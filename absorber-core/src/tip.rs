@@ -188,6 +188,28 @@ pub fn psi_and_rate<T: Real>(x: &LocalState<T>) -> (T, T) {
 
 /// Tip rotation ψ, rate and acceleration (plain values).
 pub fn psi_all<T: Real>(x: &LocalState<T>) -> (T, T, T) {
+    let p = tip_rotation(x);
+    (p.psi, p.rate, p.accel)
+}
+
+/// Tip rotation in plain values: ψ = atan2(a₄, 1 + a₃) \[rad\], ψ̇ \[rad/s\], ψ̈ \[rad/s²\], and
+/// (cos ψ, sin ψ) = a/|a| from the end slope a = (1 + a₃, a₄) without trigonometry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TipRotation<T> {
+    /// ψ \[rad\].
+    pub psi: T,
+    /// ψ̇ \[rad/s\].
+    pub rate: T,
+    /// ψ̈ \[rad/s²\].
+    pub accel: T,
+    /// cos ψ.
+    pub cos: T,
+    /// sin ψ.
+    pub sin: T,
+}
+
+/// The tip rotation of a local state (the formulas of the equations of motion, in plain values).
+pub fn tip_rotation<T: Real>(x: &LocalState<T>) -> TipRotation<T> {
     let z = T::zero();
     let p: Psi<Plain<T>> = psi_kinematics(
         x,
@@ -197,7 +219,13 @@ pub fn psi_all<T: Real>(x: &LocalState<T>) -> (T, T, T) {
             c_m: z,
         },
     );
-    (p.psi.0, p.rate.0, p.accel.0)
+    TipRotation {
+        psi: p.psi.0,
+        rate: p.rate.0,
+        accel: p.accel.0,
+        cos: p.cos.0,
+        sin: p.sin.0,
+    }
 }
 
 /// Orbit angle θ and its rate from the local state of a free ball (spin φ at index 4).
