@@ -104,6 +104,20 @@ struct Solved<T, const D: usize> {
     increment: T,
 }
 
+/// What a Newton solve solves: `r(q₀ + c_q x, v₀ + c_v x, a₀ + c_m x) = 0` for `x`, at
+/// effective gravity `g_eff`, in a contact state, the free ball optionally pinned plumb; `c_pos`
+/// converts `x` to a position for the convergence test.
+struct Problem<'a, T, const D: usize> {
+    q0: &'a SVector<T, D>,
+    v0: &'a SVector<T, D>,
+    a0: &'a SVector<T, D>,
+    ch: &'a Chain<T>,
+    c_pos: T,
+    g_eff: T,
+    contact: Contact,
+    plumb: bool,
+}
+
 /// Trust radius of a Newton correction, in units of the beam length for positions and in
 /// radians for slopes and angles: a correction beyond it is damped ([`Model::damping`]), never
 /// below it. A linearization about a state with a large (transient) axial force can be nearly
@@ -354,6 +368,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         // contact, or when an iteration with it contracts by less than half.
         let mut rebuild = false;
         let mut previous = T::zero();
+        let problem = Problem {
+            q0,
+            v0,
+            a0,
+            ch,
+            c_pos,
+            g_eff,
+            contact,
+            plumb,
+        };
         for it in 1..=max {
             let q = q0 + x * ch.c_q;
             let v = v0 + x * ch.c_v;
@@ -362,56 +386,36 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 Some(Some(c)) => !rebuild && c.c_q == ch.c_q && c.contact == contact,
                 _ => false,
             };
-            let mut own: Option<linalg::Lu<T, D>> = None;
-            let (dx, fresh) = if reuse {
+            let (step, fresh) = if reuse {
                 let (r, _) = self.residual_into(&q, &v, &a, g_eff, ch, contact, plumb, None);
                 if !r.iter().all(|z| z.is_finite()) {
                     return Err(Error::NonFiniteState);
                 }
                 // Borrow the factors: copying them would cost a D×D memcpy per iteration.
-                let dx = match cache.as_deref() {
-                    Some(Some(c)) => c.lu.solve(-r),
-                    _ => None,
-                };
-                (dx.ok_or(Error::Singular)?, false)
+                match cache.as_deref() {
+                    Some(Some(c)) => (self.correction(&problem, &x, r, &c.lu)?, false),
+                    _ => return Err(Error::Singular),
+                }
             } else {
                 let (r, jac, _) = self.assemble(&q, &v, &a, g_eff, ch, contact, plumb);
                 if !r.iter().all(|z| z.is_finite()) || !jac.iter().all(|z| z.is_finite()) {
                     return Err(Error::NonFiniteState);
                 }
                 let lu = linalg::factor(jac).ok_or(Error::Singular)?;
-                let dx = lu.solve(-r).ok_or(Error::Singular)?;
-                match cache.as_deref_mut() {
-                    Some(slot) => {
-                        *slot = Some(CachedJacobian {
-                            lu,
-                            c_q: ch.c_q,
-                            contact,
-                        })
-                    }
-                    None => own = Some(lu),
+                let step = self.correction(&problem, &x, r, &lu)?;
+                if let Some(slot) = cache.as_deref_mut() {
+                    *slot = Some(CachedJacobian {
+                        lu,
+                        c_q: ch.c_q,
+                        contact,
+                    });
                 }
                 rebuild = false;
-                (dx, true)
+                (step, true)
             };
-            if !dx.iter().all(|z| z.is_finite()) {
-                return Err(Error::Singular);
-            }
-            increment = self.scaled_norm(&dx, c_pos);
-            let cap: T = lit(MAX_STEP);
-            if increment > cap {
-                let lu = match (own.as_ref(), cache.as_deref()) {
-                    (Some(l), _) => l,
-                    (None, Some(Some(c))) => &c.lu,
-                    _ => return Err(Error::Singular),
-                };
-                let lambda = self.damping(
-                    q0, v0, a0, &x, &dx, increment, ch, c_pos, g_eff, contact, plumb, lu,
-                );
-                x += dx * lambda;
-            } else {
-                x += dx;
-            }
+            let (dx, lambda);
+            (dx, increment, lambda) = step;
+            x += dx * lambda;
             if increment <= tol {
                 return Ok(Solved {
                     x,
@@ -452,6 +456,28 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         n
     }
 
+    /// The Newton correction `dx = −J⁻¹ r` from the factors `lu`, its scaled norm, and its
+    /// damping factor λ (1 within the trust radius, else [`Model::damping`]).
+    fn correction(
+        &self,
+        p: &Problem<'_, T, D>,
+        x: &SVector<T, D>,
+        r: SVector<T, D>,
+        lu: &linalg::Lu<T, D>,
+    ) -> Result<(SVector<T, D>, T, T), Error> {
+        let dx = lu.solve(-r).ok_or(Error::Singular)?;
+        if !dx.iter().all(|z| z.is_finite()) {
+            return Err(Error::Singular);
+        }
+        let norm = self.scaled_norm(&dx, p.c_pos);
+        let lambda = if norm > lit(MAX_STEP) {
+            self.damping(p, x, &dx, norm, lu)
+        } else {
+            T::one()
+        };
+        Ok((dx, norm, lambda))
+    }
+
     /// Damping factor λ of a Newton correction `dx` larger than the trust radius `MAX_STEP`:
     /// Deuflhard's affine-invariant natural monotonicity test (Deuflhard 2004, *Newton Methods
     /// for Nonlinear Problems*, §3.3): accept λ when the simplified correction at `x + λ dx`,
@@ -464,20 +490,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// spin φ, whose linearized response to the beam's correction is ≈ 35 times larger; the beam
     /// then converged by 5 % per iteration while the spin's target ran away, and Newton failed
     /// after 100 iterations where the undamped correction converges in 6 (docs/stability.md).
-    #[allow(clippy::too_many_arguments)]
+    ///
+    /// Not inlined: it runs only on violent steps, and inlined it would grow the stack frame
+    /// and the code of every Newton iteration.
+    #[inline(never)]
     fn damping(
         &self,
-        q0: &SVector<T, D>,
-        v0: &SVector<T, D>,
-        a0: &SVector<T, D>,
+        p: &Problem<'_, T, D>,
         x: &SVector<T, D>,
         dx: &SVector<T, D>,
         norm: T,
-        ch: &Chain<T>,
-        c_pos: T,
-        g_eff: T,
-        contact: Contact,
-        plumb: bool,
         lu: &linalg::Lu<T, D>,
     ) -> T {
         let floor = lit::<T>(MAX_STEP) / norm;
@@ -489,18 +511,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             }
             let xt = x + dx * lambda;
             let (r, _) = self.residual_into(
-                &(q0 + xt * ch.c_q),
-                &(v0 + xt * ch.c_v),
-                &(a0 + xt * ch.c_m),
-                g_eff,
-                ch,
-                contact,
-                plumb,
+                &(p.q0 + xt * p.ch.c_q),
+                &(p.v0 + xt * p.ch.c_v),
+                &(p.a0 + xt * p.ch.c_m),
+                p.g_eff,
+                p.ch,
+                p.contact,
+                p.plumb,
                 None,
             );
             if r.iter().all(|z| z.is_finite()) {
                 if let Some(bar) = lu.solve(-r) {
-                    let nb = self.scaled_norm(&bar, c_pos);
+                    let nb = self.scaled_norm(&bar, p.c_pos);
                     if nb <= (one - lambda * quarter) * norm {
                         return lambda;
                     }

@@ -363,6 +363,7 @@ impl FullSolver {
         };
         let zero = [0.0; NW];
         let mut converged = m == 0;
+        let mut last: f64 = 0.0;
         for _ in 0..60 {
             if converged {
                 break;
@@ -382,11 +383,13 @@ impl FullSolver {
                 return Err(Error::NonFiniteState);
             }
             converged = inc <= 1e-13;
+            last = inc;
         }
         if !converged {
+            // The constraint solve for the dependent coordinates (tip pose, ball centre).
             return Err(Error::NoConvergence {
                 iterations: 60,
-                increment: f64::NAN,
+                increment: last,
             });
         }
         let c0 = self.bodies.constraints(&w, &zero, mode, theta_ref);
