@@ -365,7 +365,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let tol = self.params.integrator.tolerance;
         let mut increment = T::zero();
         // Modified Newton: rebuild when the cached matrix was made for another step length or
-        // contact, or when an iteration with it contracts by less than half.
+        // contact, or when its correction would contract by less than half (not taken).
         let mut rebuild = false;
         let mut previous = T::zero();
         let problem = Problem {
@@ -386,14 +386,29 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 Some(Some(c)) => !rebuild && c.c_q == ch.c_q && c.contact == contact,
                 _ => false,
             };
-            let (step, fresh) = if reuse {
+            let step = if reuse {
                 let (r, _) = self.residual_into(&q, &v, &a, g_eff, ch, contact, plumb, None);
                 if !r.iter().all(|z| z.is_finite()) {
                     return Err(Error::NonFiniteState);
                 }
                 // Borrow the factors: copying them would cost a D×D memcpy per iteration.
+                // A reused matrix must contract the correction by half, else the correction is
+                // not taken and the matrix is rebuilt here (taking it first could carry the
+                // iterate where even fresh matrices no longer converge).
+                let limit = if it > 1 {
+                    Some(previous * lit::<T>(0.5))
+                } else {
+                    None
+                };
                 match cache.as_deref() {
-                    Some(Some(c)) => (self.correction(&problem, &x, r, &c.lu)?, false),
+                    Some(Some(c)) => match self.correction(&problem, &x, r, &c.lu, limit)? {
+                        Ok(step) => step,
+                        Err(norm) => {
+                            increment = norm;
+                            rebuild = true;
+                            continue;
+                        }
+                    },
                     _ => return Err(Error::Singular),
                 }
             } else {
@@ -402,7 +417,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                     return Err(Error::NonFiniteState);
                 }
                 let lu = linalg::factor(jac).ok_or(Error::Singular)?;
-                let step = self.correction(&problem, &x, r, &lu)?;
+                let step = self
+                    .correction(&problem, &x, r, &lu, None)?
+                    .map_err(|_| Error::Singular)?;
                 if let Some(slot) = cache.as_deref_mut() {
                     *slot = Some(CachedJacobian {
                         lu,
@@ -411,7 +428,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                     });
                 }
                 rebuild = false;
-                (step, true)
+                step
             };
             let (dx, lambda);
             (dx, increment, lambda) = step;
@@ -422,9 +439,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                     iterations: it,
                     increment,
                 });
-            }
-            if !fresh && it > 1 && increment > previous * lit::<T>(0.5) {
-                rebuild = true;
             }
             previous = increment;
         }
@@ -457,25 +471,31 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     }
 
     /// The Newton correction `dx = −J⁻¹ r` from the factors `lu`, its scaled norm, and its
-    /// damping factor λ (1 within the trust radius, else [`Model::damping`]).
+    /// damping factor λ (1 within the trust radius, else [`Model::damping`]); `Err(norm)`
+    /// (nothing damped) when the norm exceeds `reject_above`.
+    #[allow(clippy::type_complexity)]
     fn correction(
         &self,
         p: &Problem<'_, T, D>,
         x: &SVector<T, D>,
         r: SVector<T, D>,
         lu: &linalg::Lu<T, D>,
-    ) -> Result<(SVector<T, D>, T, T), Error> {
+        reject_above: Option<T>,
+    ) -> Result<Result<(SVector<T, D>, T, T), T>, Error> {
         let dx = lu.solve(-r).ok_or(Error::Singular)?;
         if !dx.iter().all(|z| z.is_finite()) {
             return Err(Error::Singular);
         }
         let norm = self.scaled_norm(&dx, p.c_pos);
+        if reject_above.is_some_and(|limit| norm > limit) {
+            return Ok(Err(norm));
+        }
         let lambda = if norm > lit(MAX_STEP) {
             self.damping(p, x, &dx, norm, lu)
         } else {
             T::one()
         };
-        Ok((dx, norm, lambda))
+        Ok(Ok((dx, norm, lambda)))
     }
 
     /// Damping factor λ of a Newton correction `dx` larger than the trust radius `MAX_STEP`:
