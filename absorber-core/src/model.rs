@@ -104,6 +104,18 @@ struct Solved<T, const D: usize> {
     increment: T,
 }
 
+/// The start error when the beam end tilts beyond a stop at static equilibrium (both solvers).
+pub const END_BEYOND_STOP: Error = Error::InvalidParameter {
+    field: "ball.stop_angle",
+    reason: "the beam end tilts beyond the stop at static equilibrium (a start with the ball resting on a stop is not supported)",
+};
+
+/// The start error when the initial ball angle lies beyond a stop (both solvers).
+pub const START_BEYOND_STOP: Error = Error::InvalidParameter {
+    field: "ball.initial_angle",
+    reason: "puts the ball beyond a stop relative to the tilted housing",
+};
+
 /// What a Newton solve solves: `r(q₀ + c_q x, v₀ + c_v x, a₀ + c_m x) = 0` for `x`, at
 /// effective gravity `g_eff`, in a contact state, the free ball optionally pinned plumb; `c_pos`
 /// converts `x` to a position for the convergence test.
@@ -633,10 +645,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         };
         if S::EXTRA_DOFS == 1 {
             if S::STOPS && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
-                return Err(Error::InvalidParameter {
-                    field: "ball.stop_angle",
-                    reason: "the beam end tilts beyond the stop at static equilibrium (a start with the ball resting on a stop is not supported)",
-                });
+                return Err(END_BEYOND_STOP);
             }
             // θ(0) = θ_eq + initial angle, i.e. φ decreases by ρ/r_b times the angle.
             let k = self.inertia.orbit_per_spin;
@@ -644,10 +653,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 *spin -= self.params.ball.initial_angle / k;
             }
             if S::STOPS && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
-                return Err(Error::InvalidParameter {
-                    field: "ball.initial_angle",
-                    reason: "puts the ball beyond a stop relative to the tilted housing",
-                });
+                return Err(START_BEYOND_STOP);
             }
         }
         s.a = self.consistent_acceleration(&s)?.x;

@@ -12,6 +12,22 @@ use absorber_core::{
 /// A core model of any scene, size and scalar.
 pub struct CoreSim<T: Real, S: Scene, const N: usize, const D: usize> {
     model: Model<T, S, N, D>,
+    /// Static tip deflection \[m\] (kept apart: a model booted by [`Start::BootConverged`]
+    /// has no equilibrium of its own).
+    static_tip: f64,
+}
+
+/// How [`build_from`] starts a model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Start {
+    /// `Model::at_rest` with the given parameters.
+    AtRest,
+    /// As `AtRest`, except with a fixed Newton budget (`accept_after_budget`): the static and
+    /// consistent-acceleration solves of `at_rest` obey `max_iterations` too but never accept
+    /// the budget, so a budget of 1–3 fails there. Such a model boots with the converged solver
+    /// (as firmware would, once) and continues from that state with the budget; its
+    /// `equilibrium()` (energies, `natural_frequencies`) is then not set.
+    BootConverged,
 }
 
 fn f64_of<T: Real>(x: T) -> f64 {
@@ -91,7 +107,7 @@ impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator
     }
 
     fn static_tip_deflection(&self) -> f64 {
-        f64_of(self.model.static_tip_deflection())
+        self.static_tip
     }
 
     fn solver_name(&self) -> &'static str {
@@ -147,22 +163,35 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
 fn boxed<T: Real + Send, S: Scene + Send, const N: usize, const D: usize>(
     params: Params<T>,
     base_accel0: T,
+    start: Start,
 ) -> Result<Box<dyn Simulator>, Error> {
+    if start == Start::AtRest || !params.integrator.accept_after_budget {
+        let model = Model::<T, S, N, D>::at_rest(params, base_accel0)?;
+        let static_tip = f64_of(model.static_tip_deflection());
+        return Ok(Box::new(CoreSim { model, static_tip }));
+    }
+    let mut boot = params;
+    boot.integrator.max_iterations = Params::<T>::default().integrator.max_iterations;
+    boot.integrator.accept_after_budget = false;
+    let first = Model::<T, S, N, D>::at_rest(boot, base_accel0)?;
+    let mut model = Model::<T, S, N, D>::new(params)?;
+    model.set_state(*first.state());
     Ok(Box::new(CoreSim {
-        model: Model::<T, S, N, D>::at_rest(params, base_accel0)?,
+        model,
+        static_tip: f64_of(first.static_tip_deflection()),
     }))
 }
 
 macro_rules! by_elements {
-    ($t:ty, $s:ty, $extra:literal, $n:expr, $p:expr, $a:expr) => {
+    ($t:ty, $s:ty, $extra:literal, $n:expr, $p:expr, $a:expr, $st:expr) => {
         match $n {
-            1 => boxed::<$t, $s, 1, { 4 + $extra }>($p, $a),
-            2 => boxed::<$t, $s, 2, { 8 + $extra }>($p, $a),
-            3 => boxed::<$t, $s, 3, { 12 + $extra }>($p, $a),
-            4 => boxed::<$t, $s, 4, { 16 + $extra }>($p, $a),
-            6 => boxed::<$t, $s, 6, { 24 + $extra }>($p, $a),
-            8 => boxed::<$t, $s, 8, { 32 + $extra }>($p, $a),
-            16 => boxed::<$t, $s, 16, { 64 + $extra }>($p, $a),
+            1 => boxed::<$t, $s, 1, { 4 + $extra }>($p, $a, $st),
+            2 => boxed::<$t, $s, 2, { 8 + $extra }>($p, $a, $st),
+            3 => boxed::<$t, $s, 3, { 12 + $extra }>($p, $a, $st),
+            4 => boxed::<$t, $s, 4, { 16 + $extra }>($p, $a, $st),
+            6 => boxed::<$t, $s, 6, { 24 + $extra }>($p, $a, $st),
+            8 => boxed::<$t, $s, 8, { 32 + $extra }>($p, $a, $st),
+            16 => boxed::<$t, $s, 16, { 64 + $extra }>($p, $a, $st),
             _ => Err(Error::InvalidParameter {
                 field: "elements",
                 reason: "supported: 1, 2, 3, 4, 6, 8, 16",
@@ -172,13 +201,13 @@ macro_rules! by_elements {
 }
 
 macro_rules! by_kind {
-    ($t:ty, $kind:expr, $n:expr, $p:expr, $a:expr) => {
+    ($t:ty, $kind:expr, $n:expr, $p:expr, $a:expr, $st:expr) => {
         match $kind {
-            Kind::Beam => by_elements!($t, BeamOnly, 0, $n, $p, $a),
-            Kind::Tip => by_elements!($t, TipMass, 0, $n, $p, $a),
-            Kind::Locked => by_elements!($t, LockedBall, 0, $n, $p, $a),
-            Kind::Free => by_elements!($t, FreeBall, 1, $n, $p, $a),
-            Kind::FreeNostops => by_elements!($t, FreeBallNoStops, 1, $n, $p, $a),
+            Kind::Beam => by_elements!($t, BeamOnly, 0, $n, $p, $a, $st),
+            Kind::Tip => by_elements!($t, TipMass, 0, $n, $p, $a, $st),
+            Kind::Locked => by_elements!($t, LockedBall, 0, $n, $p, $a, $st),
+            Kind::Free => by_elements!($t, FreeBall, 1, $n, $p, $a, $st),
+            Kind::FreeNostops => by_elements!($t, FreeBallNoStops, 1, $n, $p, $a, $st),
         }
     };
 }
@@ -192,8 +221,34 @@ pub fn build(
     params: &Params<f64>,
     base_accel0: f64,
 ) -> Result<Box<dyn Simulator>, Error> {
+    build_from(
+        kind,
+        elements,
+        precision,
+        params,
+        base_accel0,
+        Start::AtRest,
+    )
+}
+
+/// As [`build`], started as `start` says.
+pub fn build_from(
+    kind: Kind,
+    elements: usize,
+    precision: Precision,
+    params: &Params<f64>,
+    base_accel0: f64,
+    start: Start,
+) -> Result<Box<dyn Simulator>, Error> {
     match precision {
-        Precision::F64 => by_kind!(f64, kind, elements, *params, base_accel0),
-        Precision::F32 => by_kind!(f32, kind, elements, params_f32(params), base_accel0 as f32),
+        Precision::F64 => by_kind!(f64, kind, elements, *params, base_accel0, start),
+        Precision::F32 => by_kind!(
+            f32,
+            kind,
+            elements,
+            params_f32(params),
+            base_accel0 as f32,
+            start
+        ),
     }
 }

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-pub use sim::{build_embedded, EmbeddedSim};
+pub use sim::build_embedded;
 
 /// The paper's step h₀ \[s\].
 pub const PAPER_STEP: f64 = 0.003;

@@ -119,7 +119,7 @@ struct Evaluated {
     lambda_local: [f64; MC],
 }
 
-use absorber_core::model::{DAMPING_TRIALS, MAX_STEP};
+use absorber_core::model::{DAMPING_TRIALS, END_BEYOND_STOP, MAX_STEP, START_BEYOND_STOP};
 /// Half-bandwidth of the reduced Newton matrix.
 const RED_BW: usize = 7;
 
@@ -866,10 +866,7 @@ impl FullSolver {
         let mode = self.mode(Contact::Off);
         if mode == Mode::Free {
             if self.scene.stops() && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
-                return Err(Error::InvalidParameter {
-                    field: "ball.stop_angle",
-                    reason: "the beam end tilts beyond the stop at static equilibrium (a start with the ball resting on a stop is not supported)",
-                });
+                return Err(END_BEYOND_STOP);
             }
             // Rotate the ball by the initial angle at fixed housing: by c₅, δφ = −(ρ/r_b) δθ.
             let phi = self.zloc(PHI);
@@ -879,10 +876,7 @@ impl FullSolver {
             let ai = self.gather_ind(&s.a, mode);
             s = self.complete(&qi, &vi, &ai, mode, &s, 0.0, base_accel, Contact::Off)?;
             if self.scene.stops() && self.relative_angle(&s).abs() >= self.params.ball.stop_angle {
-                return Err(Error::InvalidParameter {
-                    field: "ball.initial_angle",
-                    reason: "puts the ball beyond a stop relative to the tilted housing",
-                });
+                return Err(START_BEYOND_STOP);
             }
         }
         let acc = self.consistent_acceleration(&s)?;
