@@ -21,6 +21,8 @@ fi
 missing=()
 command -v qemu-system-arm >/dev/null || missing+=(qemu-system-arm)
 command -v arm-none-eabi-size >/dev/null || missing+=(binutils-arm-none-eabi)
+command -v gcc >/dev/null || missing+=(gcc)
+command -v python3 >/dev/null || missing+=(python3)
 if ((${#missing[@]})); then
     sudo=""
     [ "$(id -u)" = 0 ] || sudo=sudo
@@ -40,7 +42,7 @@ cargo build -q -p absorber-firmware --target "$target" --profile fw --config fir
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail=0
-for scene in free free-modified free-monitor beam locked empty; do
+for scene in free free-modified free-monitor free-n6 beam locked empty; do
     "$tdir/release/fw-$scene" >"$out/$scene.host"
     hash=$(sed -n 's/^state_hash=//p' "$out/$scene.host")
     set +e
@@ -62,5 +64,9 @@ for scene in free free-modified free-monitor beam locked empty; do
             "$(sed -n 's/^impacts=\([0-9]*\) stuck=[0-9]* iterations=\([0-9]*\) .*/\1 impacts, \2 Newton iterations/p' "$out/$scene.host"), state_hash=$hash)"
     fi
 done
+[ $fail = 0 ] || exit $fail
+# Budgets: exact instruction counts per step, static stack bound, flash, no panic path
+# (firmware/budget.toml; the figures are measured afresh, docs are not touched).
+scripts/embedded-report.sh --check || fail=1
 echo "embedded: done in $((SECONDS - start)) s"
 exit $fail

@@ -5,8 +5,15 @@
 # Newton, and with the on-device monitor, whose `Monitor::record` is also counted on its own),
 # beam-only and locked-ball scenes.
 #
-# Usage: scripts/embedded-report.sh          (needs what .ci/embedded.sh installs, plus gcc and python3)
+# Writes docs/embedded.md's generated section and docs/embedded.json (per scene: mean and worst
+# instructions per step, static stack bound, flash at opt 3 and s), then checks them against
+# firmware/budget.toml. With --check (CI) the docs are left alone: the figures go to the target
+# directory and only the budget check counts.
+#
+# Usage: scripts/embedded-report.sh [--check]   (needs what .ci/embedded.sh installs, plus gcc and python3)
 set -euo pipefail
+check_only=0
+[ "${1:-}" = "--check" ] && check_only=1
 cd "$(dirname "$0")/.."
 root=$PWD
 target=thumbv7em-none-eabihf
@@ -51,7 +58,7 @@ count_calls() {
 }
 
 for profile in fw fw-size; do
-    for scene in free free-modified free-monitor beam locked empty; do
+    for scene in free free-modified free-monitor free-n6 beam locked empty; do
         elf=$tdir/$target/$profile/fw-$scene
         stem=$work/$profile-$scene
         "$tdir/release/fw-$scene" >"$stem.host"
@@ -70,5 +77,12 @@ for profile in fw fw-size; do
     done
 done
 
-python3 scripts/embedded-report.py "$work" docs/embedded.md
-echo "embedded-report: docs/embedded.md updated"
+if [ $check_only = 1 ]; then
+    cp docs/embedded.md "$work/embedded.md"
+    python3 scripts/embedded-report.py "$work" "$work/embedded.md" "$work/embedded.json"
+    python3 scripts/embedded-budget.py "$work/embedded.json"
+else
+    python3 scripts/embedded-report.py "$work" docs/embedded.md docs/embedded.json
+    echo "embedded-report: docs/embedded.md and docs/embedded.json updated"
+    python3 scripts/embedded-budget.py docs/embedded.json
+fi

@@ -212,37 +212,39 @@ impl<T: Real> Element<T> {
         (sx, eps, g)
     }
 
+    /// The axial terms' data at the Gauss points, computed once (see [`AxialQuadrature`]).
+    pub fn axial_quadrature(&self) -> AxialQuadrature<T> {
+        let mut q = AxialQuadrature {
+            sx: [[T::zero(); 4]; 5],
+            weight: [T::zero(); 5],
+        };
+        for ((sx, w), (xi, wg)) in q.sx.iter_mut().zip(q.weight.iter_mut()).zip(GAUSS5) {
+            *sx = shape_x(self.length, lit::<T>(xi));
+            *w = self.axial_rigidity * self.length * lit::<T>(wg);
+        }
+        q
+    }
+
     /// Axial elastic force `Q_l = ∫ EA ε S_xᵀ r′ dx` (eqs. 12–13), by 5-point Gauss (exact).
     pub fn axial_force(&self, u: &ElementVector<T>) -> ElementVector<T> {
-        let mut force = ElementVector::zeros();
-        for (xi, w) in GAUSS5 {
-            let (_, eps, g) = self.axial_point(u, lit::<T>(xi));
-            force += g * (self.axial_rigidity * self.length * lit::<T>(w) * eps);
-        }
-        force
+        self.axial_quadrature().force(u)
     }
 
     /// Axial elastic force (as [`Element::axial_force`]) and its exact tangent
-    /// `K_l = ∫ EA [(S_xᵀ r′)(S_xᵀ r′)ᵀ + ε S_xᵀ S_x] dx`, by 5-point Gauss (exact).
+    /// `K_l = ∫ EA [(S_xᵀ r′)(S_xᵀ r′)ᵀ + ε S_xᵀ S_x] dx`, by 5-point Gauss (exact), as a full
+    /// 8×8 matrix (the full solver's form; the core adds [`AxialQuadrature::tangent`]'s blocks
+    /// straight into its band).
     pub fn axial_force_and_tangent(
         &self,
         u: &ElementVector<T>,
     ) -> (ElementVector<T>, ElementMatrix<T>) {
-        let mut force = ElementVector::zeros();
+        let quad = self.axial_quadrature();
         let mut tangent = ElementMatrix::zeros();
-        for (xi, w) in GAUSS5 {
-            let (sx, eps, g) = self.axial_point(u, lit::<T>(xi));
-            let c = self.axial_rigidity * self.length * lit::<T>(w);
-            force += g * (c * eps);
-            tangent += g * g.transpose() * c;
-            for i in 0..4 {
-                for j in 0..4 {
-                    let v = c * eps * sx[i] * sx[j];
-                    tangent[(2 * i, 2 * j)] += v;
-                    tangent[(2 * i + 1, 2 * j + 1)] += v;
-                }
+        let force = quad.tangent(u, |row, col, value| {
+            if let Some(t) = tangent.get_mut((row, col)) {
+                *t = value;
             }
-        }
+        });
         (force, tangent)
     }
 
@@ -396,5 +398,102 @@ mod tests {
         let e = el();
         let q = e.gravity_force(9.81);
         assert!((q[1] + q[5] + e.mass() * 9.81).abs() < 1e-15);
+    }
+}
+
+/// The axial force and tangent of one element at the 5 Gauss points, with the shape
+/// derivatives and weights converted to the scalar once (at construction, not per step).
+///
+/// At Gauss point p (weight `w_p = EA l ω_p`), with `d = S_x u`, `r′ = (1 + d₁, d₂)` and
+/// `ε = d₁ + ½|d|²` (eq. 11): `Q_l = Σ_p w_p ε (s_x ⊗ r′)` and, since `S_xᵀ r′ = s_x ⊗ r′`,
+/// `K_l = Σ_p w_p (s_x s_xᵀ) ⊗ (r′ r′ᵀ + ε I₂)` — a Kronecker form: each 2×2 block `(i, j)` is
+/// `Σ_p w_p s_{x,i} s_{x,j} R_p` with the symmetric `R_p = r′r′ᵀ + ε I₂`. Evaluated so, the
+/// tangent costs 10 × 3 products per point instead of the 64 + 32 of the dense form.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxialQuadrature<T> {
+    /// `∂s_k/∂x` at each Gauss point.
+    pub sx: [[T; 4]; 5],
+    /// `EA · l · ω_p` \[N·m\].
+    pub weight: [T; 5],
+}
+
+impl<T: Real> AxialQuadrature<T> {
+    /// `(d, ε)` at Gauss point `sx`: `d = S_x u − (1, 0)`… i.e. `r′ − (1, 0)`, and the strain.
+    #[inline]
+    fn strain(sx: &[T; 4], u: &ElementVector<T>) -> (T, T, T) {
+        let (mut d1, mut d2) = (T::zero(), T::zero());
+        for (pair, s) in u.as_slice().chunks_exact(2).zip(sx.iter()) {
+            if let [x, y] = pair {
+                d1 += *x * *s;
+                d2 += *y * *s;
+            }
+        }
+        let eps = d1 + lit::<T>(0.5) * (d1 * d1 + d2 * d2);
+        (d1, d2, eps)
+    }
+
+    /// Axial elastic force `Q_l` (eqs. 12–13).
+    pub fn force(&self, u: &ElementVector<T>) -> ElementVector<T> {
+        let mut f = ElementVector::zeros();
+        for (sx, w) in self.sx.iter().zip(self.weight.iter()) {
+            let (d1, d2, eps) = Self::strain(sx, u);
+            let c = *w * eps;
+            let (r1, r2) = ((T::one() + d1) * c, d2 * c);
+            for (pair, s) in f.as_mut_slice().chunks_exact_mut(2).zip(sx.iter()) {
+                if let [fx, fy] = pair {
+                    *fx += *s * r1;
+                    *fy += *s * r2;
+                }
+            }
+        }
+        f
+    }
+
+    /// Axial force `Q_l` and its tangent `K_l`, whose entries are handed to `put(row, col,
+    /// value)` (local rows/columns 0..8, every entry of the symmetric matrix once).
+    pub fn tangent(
+        &self,
+        u: &ElementVector<T>,
+        mut put: impl FnMut(usize, usize, T),
+    ) -> ElementVector<T> {
+        let mut f = ElementVector::zeros();
+        // blocks[i][j] = (xx, xy, yy) of the 2×2 block (i, j), j ≥ i.
+        let mut blocks = [[[T::zero(); 3]; 4]; 4];
+        for (sx, w) in self.sx.iter().zip(self.weight.iter()) {
+            let (d1, d2, eps) = Self::strain(sx, u);
+            let (r1, r2) = (T::one() + d1, d2);
+            let c = *w * eps;
+            for (pair, s) in f.as_mut_slice().chunks_exact_mut(2).zip(sx.iter()) {
+                if let [fx, fy] = pair {
+                    *fx += *s * (r1 * c);
+                    *fy += *s * (r2 * c);
+                }
+            }
+            let rr = [*w * (r1 * r1 + eps), *w * (r1 * r2), *w * (r2 * r2 + eps)];
+            for (i, (row, si)) in blocks.iter_mut().zip(sx.iter()).enumerate() {
+                for (block, sj) in row.iter_mut().zip(sx.iter()).skip(i) {
+                    let sij = *si * *sj;
+                    for (b, r) in block.iter_mut().zip(rr.iter()) {
+                        *b += sij * *r;
+                    }
+                }
+            }
+        }
+        for (i, row) in blocks.iter().enumerate() {
+            for (j, [xx, xy, yy]) in row.iter().enumerate().skip(i) {
+                let (r, c) = (2 * i, 2 * j);
+                put(r, c, *xx);
+                put(r, c + 1, *xy);
+                put(r + 1, c, *xy);
+                put(r + 1, c + 1, *yy);
+                if j != i {
+                    put(c, r, *xx);
+                    put(c + 1, r, *xy);
+                    put(c, r + 1, *xy);
+                    put(c + 1, r + 1, *yy);
+                }
+            }
+        }
+        f
     }
 }

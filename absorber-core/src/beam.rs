@@ -7,8 +7,13 @@
 //! `r_k = M_e ä_k + c K_b u̇_k + K_b u_k + Q_l(u_k) − Q_f(g_eff)`  (paper eqs. 8, 12, 13, 17)
 //!
 //! and the Newmark tangent `c_m M_e + c_v c K_b + c_q (K_b + K_l(u_k))`.
+//!
+//! Both directions of the plane share the Hermite shape functions, so `M_e = M₄ ⊗ I₂` and
+//! `K_b = K₄ ⊗ I₂` with 4×4 scalar matrices ([`Beam::mass4`], [`Beam::stiffness4`]): the
+//! assembly works on those (half the products of the 8×8 forms) and writes straight into the
+//! system's residual and Newton matrix (no element matrix is built on the step path).
 
-use crate::ancf::{Element, ElementMatrix, ElementVector};
+use crate::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector};
 use crate::scalar::Real;
 use crate::tip::Chain;
 use nalgebra::{SMatrix, SVector};
@@ -24,6 +29,12 @@ pub struct Beam<T> {
     pub stiffness: ElementMatrix<T>,
     /// Stiffness-proportional damping coefficient \[s\].
     pub damping: T,
+    /// `M₄`: `mass = M₄ ⊗ I₂` \[kg, kg·m, kg·m²\].
+    pub mass4: [[T; 4]; 4],
+    /// `K₄`: `stiffness = K₄ ⊗ I₂`.
+    pub stiffness4: [[T; 4]; 4],
+    /// The axial terms' Gauss-point data.
+    pub quadrature: AxialQuadrature<T>,
 }
 
 /// Global row of local coordinate `i` (0..8) of element `k`; `None` for the clamped root node.
@@ -36,61 +47,140 @@ pub fn global_index(k: usize, i: usize) -> Option<usize> {
 #[inline]
 pub fn gather<T: Real, const D: usize>(x: &SVector<T, D>, k: usize) -> ElementVector<T> {
     let mut e = ElementVector::zeros();
-    for (i, slot) in e.iter_mut().enumerate() {
-        if let Some(v) = global_index(k, i).and_then(|g| x.get(g)) {
-            *slot = *v;
+    if let (Some(dst), Some(src)) = (
+        e.as_mut_slice().get_mut(if k == 0 { 4 } else { 0 }..),
+        x.as_slice().get((4 * k).saturating_sub(4)..),
+    ) {
+        for (d, s) in dst.iter_mut().zip(src.iter()) {
+            *d = *s;
         }
     }
     e
 }
 
+/// Adds `v` at `(row, col)` of a column-major `D×D` slice (nothing outside it).
+#[inline]
+fn add_at<T: Real>(m: &mut [T], d: usize, row: usize, col: usize, v: T) {
+    if let Some(x) = m.get_mut(col * d + row) {
+        *x += v;
+    }
+}
+
 impl<T: Real> Beam<T> {
-    /// Adds the beam's residual and, when `jac` is given, its tangent for all `n` elements.
-    #[allow(clippy::too_many_arguments)]
-    pub fn assemble<const D: usize>(
+    /// The beam of `n` uniform elements of `element`, with damping coefficient `damping` \[s\].
+    pub fn new(element: Element<T>, damping: T) -> Self {
+        let mass = element.mass_matrix();
+        let stiffness = element.bending_stiffness();
+        let mut mass4 = [[T::zero(); 4]; 4];
+        let mut stiffness4 = [[T::zero(); 4]; 4];
+        for (i, (mr, kr)) in mass4.iter_mut().zip(stiffness4.iter_mut()).enumerate() {
+            for (j, (m, k)) in mr.iter_mut().zip(kr.iter_mut()).enumerate() {
+                *m = mass[(2 * i, 2 * j)];
+                *k = stiffness[(2 * i, 2 * j)];
+            }
+        }
+        Self {
+            element,
+            mass,
+            stiffness,
+            damping,
+            mass4,
+            stiffness4,
+            quadrature: element.axial_quadrature(),
+        }
+    }
+
+    /// Element `k`'s linear forces `M₄ ä + K₄ (u + c u̇)` per direction plus the axial force,
+    /// minus the weight, added into `r`.
+    #[inline]
+    fn add_element_residual<const D: usize>(
+        &self,
+        k: usize,
+        u: &ElementVector<T>,
+        (v, a): (&ElementVector<T>, &ElementVector<T>),
+        axial: &ElementVector<T>,
+        weight: &ElementVector<T>,
+        r: &mut SVector<T, D>,
+    ) {
+        let c = self.damping;
+        for (i, (mrow, krow)) in self.mass4.iter().zip(self.stiffness4.iter()).enumerate() {
+            for dir in 0..2 {
+                let li = 2 * i + dir;
+                let mut sum = axial.get(li).copied().unwrap_or(T::zero())
+                    - weight.get(li).copied().unwrap_or(T::zero());
+                for (j, (m, kk)) in mrow.iter().zip(krow.iter()).enumerate() {
+                    let lj = 2 * j + dir;
+                    if let (Some(uj), Some(vj), Some(aj)) = (u.get(lj), v.get(lj), a.get(lj)) {
+                        sum += *m * *aj + *kk * (*uj + c * *vj);
+                    }
+                }
+                if let Some(dst) = global_index(k, li).and_then(|g| r.get_mut(g)) {
+                    *dst += sum;
+                }
+            }
+        }
+    }
+
+    /// Adds the beam's residual for all `n` elements into `r`.
+    pub fn residual<const D: usize>(
         &self,
         n: usize,
-        q: &SVector<T, D>,
-        v: &SVector<T, D>,
-        a: &SVector<T, D>,
+        (q, v, a): (&SVector<T, D>, &SVector<T, D>, &SVector<T, D>),
         g_eff: T,
-        ch: &Chain<T>,
         r: &mut SVector<T, D>,
-        mut jac: Option<&mut SMatrix<T, D, D>>,
     ) {
         let weight = self.element.gravity_force(g_eff);
         for k in 0..n {
-            let (qe, ve, ae) = (gather(q, k), gather(v, k), gather(a, k));
-            let elastic = self.stiffness * (qe + ve * self.damping);
-            let (qa, je) = match jac {
-                Some(_) => {
-                    let (qa, ka) = self.element.axial_force_and_tangent(&qe);
-                    let je = self.mass * ch.c_m
-                        + self.stiffness * (ch.c_q + ch.c_v * self.damping)
-                        + ka * ch.c_q;
-                    (qa, Some(je))
+            let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
+            let axial = self.quadrature.force(&u);
+            self.add_element_residual(k, &u, (&ue, &ae), &axial, &weight, r);
+        }
+    }
+
+    /// Adds the beam's residual into `r` and its Newton matrix along the chain `ch` into `jac`:
+    /// per element `(c_m M₄ + (c_q + c_v c) K₄) ⊗ I₂ + c_q K_l`.
+    pub fn residual_and_jacobian<const D: usize>(
+        &self,
+        n: usize,
+        (q, v, a): (&SVector<T, D>, &SVector<T, D>, &SVector<T, D>),
+        g_eff: T,
+        ch: &Chain<T>,
+        r: &mut SVector<T, D>,
+        jac: &mut SMatrix<T, D, D>,
+    ) {
+        let weight = self.element.gravity_force(g_eff);
+        let c_k = ch.c_q + ch.c_v * self.damping;
+        let mut linear = [[T::zero(); 4]; 4];
+        for ((lr, mr), kr) in linear
+            .iter_mut()
+            .zip(self.mass4.iter())
+            .zip(self.stiffness4.iter())
+        {
+            for ((l, m), kk) in lr.iter_mut().zip(mr.iter()).zip(kr.iter()) {
+                *l = ch.c_m * *m + c_k * *kk;
+            }
+        }
+        let data = jac.as_mut_slice();
+        for k in 0..n {
+            let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
+            // The clamped root node's rows and columns are not unknowns: offset −4.
+            let axial = self.quadrature.tangent(&u, |li, lj, value| {
+                if let (Some(gi), Some(gj)) = (global_index(k, li), global_index(k, lj)) {
+                    add_at(data, D, gi, gj, ch.c_q * value);
                 }
-                None => (self.element.axial_force(&qe), None),
-            };
-            let re = self.mass * ae + elastic + qa - weight;
-            for i in 0..8 {
-                let Some(gi) = global_index(k, i) else {
-                    continue;
-                };
-                if let (Some(dst), Some(src)) = (r.get_mut(gi), re.get(i)) {
-                    *dst += *src;
-                }
-                if let (Some(jac), Some(je)) = (jac.as_deref_mut(), je.as_ref()) {
-                    for j in 0..8 {
-                        let Some(gj) = global_index(k, j) else {
-                            continue;
-                        };
-                        if let (Some(dst), Some(src)) = (jac.get_mut((gi, gj)), je.get((i, j))) {
-                            *dst += *src;
+            });
+            for (i, row) in linear.iter().enumerate() {
+                for (j, value) in row.iter().enumerate() {
+                    for dir in 0..2 {
+                        if let (Some(gi), Some(gj)) =
+                            (global_index(k, 2 * i + dir), global_index(k, 2 * j + dir))
+                        {
+                            add_at(data, D, gi, gj, *value);
                         }
                     }
                 }
             }
+            self.add_element_residual(k, &u, (&ue, &ae), &axial, &weight, r);
         }
     }
 }

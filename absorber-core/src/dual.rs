@@ -193,7 +193,7 @@ impl<T: Real, const K: usize> Number<T> for Dual<T, K> {
     }
     #[inline]
     fn sin_cos(self) -> (Self, Self) {
-        let (s, c) = self.re.sin_cos();
+        let (s, c) = self.re.fast_sin_cos();
         (self.chain(s, c), self.chain(c, -s))
     }
     #[inline]
@@ -258,7 +258,7 @@ impl<T: Real> Number<T> for Plain<T> {
     }
     #[inline]
     fn sin_cos(self) -> (Self, Self) {
-        let (s, c) = self.0.sin_cos();
+        let (s, c) = self.0.fast_sin_cos();
         (Plain(s), Plain(c))
     }
     #[inline]

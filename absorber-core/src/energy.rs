@@ -61,21 +61,21 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// without a ball).
     fn heights(&self, q: &nalgebra::SVector<T, D>, ang: &Angles<T>, cos_theta: T) -> Heights<T> {
         let mut beam = T::zero();
-        let unit = self.beam.element.gravity_force(T::one());
+        let unit = self.sys.beam.element.gravity_force(T::one());
         for k in 0..N {
             // ∫ μ y dx = −Q_f(g = 1) · u (eq. 17).
             beam -= unit.dot(&gather(q, k));
         }
         let y_a = q.get(4 * N - 3).copied().unwrap_or(T::zero());
-        let tip = y_a - self.params.tip.offset * ang.cos_psi;
-        let ball = y_a - self.params.ball.path_radius() * cos_theta;
+        let tip = y_a - self.sys.params.tip.offset * ang.cos_psi;
+        let ball = y_a - self.sys.params.ball.path_radius() * cos_theta;
         Heights { beam, tip, ball }
     }
 
     /// Heights of the static equilibrium the run started from.
     pub(crate) fn equilibrium_heights(&self) -> Heights<T> {
         let s = State {
-            q: self.equilibrium,
+            q: self.sys.equilibrium,
             ..self.state
         };
         let ang = self.angles_of(&s);
@@ -104,7 +104,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         base_displacement: T,
     ) -> (Energies<T>, Angles<T>) {
         let s = &self.state;
-        let g = self.params.gravity;
+        let g = self.sys.params.gravity;
         let half = lit::<T>(0.5);
         let z = T::zero();
         let mut e = Energies {
@@ -116,12 +116,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             ball_kinetic: z,
             ball_potential: z,
         };
-        // By reference: `self.beam.mass * v` would copy the 8×8 matrix (256 bytes in f32).
-        let mass = &self.beam.mass;
+        // By reference: `self.sys.beam.mass * v` would copy the 8×8 matrix (256 bytes in f32).
+        let mass = &self.sys.beam.mass;
         for k in 0..N {
             let u = gather(&s.q, k);
-            e.beam_strain += self.beam.element.axial_energy(&u)
-                + Element::bending_energy_with(&self.beam.stiffness, &u);
+            e.beam_strain += self.sys.beam.element.axial_energy(&u)
+                + Element::bending_energy_with(&self.sys.beam.stiffness, &u);
             let mut v = gather(&s.v, k);
             v[1] += base_velocity;
             v[5] += base_velocity;
@@ -130,12 +130,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let ang = self.angles_of(s);
         let (sin_theta, cos_theta) = ang.theta_sin_cos().unwrap_or((z, T::one()));
         let now = self.heights(&s.q, &ang, cos_theta);
-        e.beam_potential = g * (now.beam - eq.beam + self.params.beam.mass * base_displacement);
+        e.beam_potential = g * (now.beam - eq.beam + self.sys.params.beam.mass * base_displacement);
         if S::HAS_TIP {
             let rate = ang.psi_rate;
             let xd = s.v.get(4 * N - 4).copied().unwrap_or(z);
             let yd = s.v.get(4 * N - 3).copied().unwrap_or(z) + base_velocity;
-            let p = &self.params.tip;
+            let p = &self.sys.params.tip;
             let (vx, vy) = (
                 xd + p.offset * rate * ang.cos_psi,
                 yd + p.offset * rate * ang.sin_psi,
@@ -143,7 +143,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             e.tip_kinetic = half * (p.mass * (vx * vx + vy * vy) + p.inertia * rate * rate);
             e.tip_potential = g * p.mass * (now.tip - eq.tip + base_displacement);
             if let Some((_, theta_rate)) = ang.theta {
-                let b = &self.params.ball;
+                let b = &self.sys.params.ball;
                 let rho = b.path_radius();
                 let (vx, vy) = (
                     xd + rho * theta_rate * cos_theta,
@@ -162,8 +162,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let mut u_total = T::zero();
         for k in 0..N {
             let u: ElementVector<T> = gather(q, k);
-            u_total += self.beam.element.axial_energy(&u)
-                + Element::bending_energy_with(&self.beam.stiffness, &u);
+            u_total += self.sys.beam.element.axial_energy(&u)
+                + Element::bending_energy_with(&self.sys.beam.stiffness, &u);
         }
         u_total
     }

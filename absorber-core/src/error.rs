@@ -15,6 +15,9 @@ pub enum Error {
     },
     /// The step input (base acceleration) is NaN or infinite. The state is unchanged.
     NonFiniteInput,
+    /// The step input is finite but beyond [`crate::model::MAX_BASE_ACCEL`] (a sensor or wiring
+    /// fault, not a motion the model can represent). The state is unchanged.
+    InputOutOfRange,
     /// Newton did not reach the tolerance within the iteration budget. The state is unchanged.
     NoConvergence {
         /// Iterations done (= the budget).
@@ -33,6 +36,11 @@ impl fmt::Display for Error {
         match self {
             Error::InvalidParameter { field, reason } => write!(f, "invalid parameter `{field}`: {reason}"),
             Error::NonFiniteInput => write!(f, "base acceleration is not finite; state kept"),
+            Error::InputOutOfRange => write!(
+                f,
+                "base acceleration beyond ±{:.0} m/s² (a sensor fault, not a motion); state kept",
+                crate::model::MAX_BASE_ACCEL
+            ),
             Error::NoConvergence { iterations, increment } => write!(
                 f,
                 "Newton did not converge in {iterations} iterations (last increment {increment:.3e}); state kept"

@@ -44,11 +44,17 @@ pub mod linalg;
 pub mod model;
 pub mod modes;
 pub mod monitor;
+pub mod newmark;
+pub mod newton;
 mod outputs;
 pub mod params;
 pub mod scalar;
 pub mod scene;
+pub mod statics;
+pub mod stops;
+pub mod system;
 pub mod tip;
+pub mod trig;
 
 pub use energy::Energies;
 pub use error::Error;

@@ -71,10 +71,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// Mass and stiffness matrices linearized about the static equilibrium (symmetrized).
     pub fn linearized(&self) -> (SMatrix<T, D, D>, SMatrix<T, D, D>) {
         let z = SVector::<T, D>::zeros();
-        let g = self.params.gravity;
+        let g = self.sys.params.gravity;
         let zero = T::zero();
         let (_, m, _) = self.assemble(
-            &self.equilibrium,
+            &self.sys.equilibrium,
             &z,
             &z,
             g,
@@ -87,7 +87,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             false,
         );
         let (_, k, _) = self.assemble(
-            &self.equilibrium,
+            &self.sys.equilibrium,
             &z,
             &z,
             g,

@@ -32,7 +32,7 @@ impl<T: Real> Angles<T> {
         Some(if self.theta_is_psi {
             (self.sin_psi, self.cos_psi)
         } else {
-            theta.sin_cos()
+            theta.fast_sin_cos()
         })
     }
 
@@ -53,7 +53,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let theta = match S::BALL {
             BallKind::None => None,
             BallKind::Locked => Some((psi, psi_rate)),
-            BallKind::Free => Some(tip::orbit_angle(&self.inertia, &x)),
+            BallKind::Free => Some(tip::orbit_angle(&self.sys.inertia, &x)),
         };
         Angles {
             psi,
@@ -113,7 +113,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// power is `−ÿ_b p_y`: integrating it gives the work the base has done, the bound every
     /// run's energy must respect.
     pub fn vertical_momentum(&self) -> T {
-        let unit = self.beam.element.gravity_force(T::one());
+        let unit = self.sys.beam.element.gravity_force(T::one());
         let mut p = T::zero();
         for k in 0..N {
             p -= unit.dot(&crate::beam::gather(&self.state.v, k));
@@ -121,12 +121,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         if S::HAS_TIP {
             let y_rate = self.tip_velocity();
             let ang = self.angles_of(&self.state);
-            p += self.params.tip.mass
-                * (y_rate + self.params.tip.offset * ang.psi_rate * ang.sin_psi);
+            p += self.sys.params.tip.mass
+                * (y_rate + self.sys.params.tip.offset * ang.psi_rate * ang.sin_psi);
             if let (Some((_, theta_rate)), Some((sin_theta, _))) = (ang.theta, ang.theta_sin_cos())
             {
-                let rho = self.params.ball.path_radius();
-                p += self.params.ball.mass * (y_rate + rho * theta_rate * sin_theta);
+                let rho = self.sys.params.ball.path_radius();
+                p += self.sys.params.ball.mass * (y_rate + rho * theta_rate * sin_theta);
             }
         }
         p
@@ -134,7 +134,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
 
     /// Static tip deflection of the equilibrium the run started from \[m\].
     pub fn static_tip_deflection(&self) -> T {
-        self.equilibrium
+        self.sys
+            .equilibrium
             .get(4 * N - 3)
             .copied()
             .unwrap_or(T::zero())

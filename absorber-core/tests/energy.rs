@@ -49,15 +49,17 @@ fn energy_error(h: f64, steps: usize, tolerance: f64) -> (f64, f64, f64) {
 /// With γ = ½, β = ¼ (trapezoidal rule) and no excitation the total energy is conserved over
 /// 10⁴ steps of 3 ms (30 s): the rule conserves the energy of linear systems exactly; for the
 /// nonlinear parts (ball pendulum, tip rotation, axial–bending coupling) its error is a bounded
-/// O(h²) oscillation without secular drift. Checks, with the paper's tolerance 1e-5: (1) the
-/// worst error is below 1e-3 of the dynamic energy (measured 3.1e-4); (3) no drift: the final
+/// O(h²) oscillation without secular drift. Checks, with a Newton tolerance of 1e-7: (1) the
+/// worst error is below 1e-3 of the dynamic energy (measured 3.1e-4; at the paper's 1e-5 the
+/// default per-step Newton, which converges linearly on its reused matrix, leaves a residue
+/// that drifts to 6e-3 over the 30 s — docs/model.md, "Newton"); (3) no drift: the final
 /// error is below the worst. (2) It is second order: halving h divides it by 3…5 (h² gives 4)
 /// over the same 30 s — with a Newton tolerance of 1e-8, because the tolerance bounds the
 /// *position* increment βh²Δa, so at h = 1.5 ms 1e-5 leaves a Newton residue (5e-8 J) larger
 /// than the time-discretization error (docs/model.md: tighten it ∝ h² for small steps).
 #[test]
 fn trapezoidal_newmark_conserves_energy_over_ten_thousand_steps() {
-    let (worst, drift, dynamic) = energy_error(3e-3, 10_000, 1e-5);
+    let (worst, drift, dynamic) = energy_error(3e-3, 10_000, 1e-7);
     let (worst_tight, _, _) = energy_error(3e-3, 10_000, 1e-8);
     let (worst_half, _, _) = energy_error(1.5e-3, 20_000, 1e-8);
     println!(
@@ -132,6 +134,9 @@ fn impacts(model: ImpactModel, e: f64, impacts: usize) -> Vec<(f64, f64, f64)> {
     p.integrator.step = 1e-3;
     p.ball.restitution = e;
     p.ball.impact_model = model;
+    // Per-step Newton leaves a residue ∝ the tolerance (a reused matrix converges linearly);
+    // 1e-7 keeps it below the impact budgets as full Newton's quadratic overshoot did at 1e-5.
+    p.integrator.tolerance = 1e-7;
     p.ball.initial_angle = -62f64.to_radians();
     let mut m = Model::<f64, FreeBall, 3, 13>::at_rest(p, 0.0).unwrap();
     let b = &p.ball;

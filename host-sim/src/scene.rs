@@ -194,7 +194,9 @@ pub struct IntegratorSection {
     pub tolerance: f64,
     /// Newton iteration budget.
     pub max_iterations: u32,
-    /// Newton variant: `full` (Jacobian every iteration, the paper's) or `modified` (cached).
+    /// Newton variant: `per-step` (one Jacobian per step, reused while it contracts; the
+    /// default), `full` (Jacobian every iteration, the paper's literal method) or `modified`
+    /// (kept across steps).
     pub newton: NewtonSetting,
     /// Accept the iterate after `max_iterations` instead of failing the step.
     pub accept_after_budget: bool,
@@ -204,6 +206,8 @@ pub struct IntegratorSection {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum NewtonSetting {
+    /// One Newton matrix per step, reused while it contracts (default).
+    PerStep,
     /// Full Newton–Raphson.
     Full,
     /// Modified Newton (factored Jacobian kept while it contracts).
@@ -352,6 +356,7 @@ impl Default for IntegratorSection {
             tolerance: p.tolerance,
             max_iterations: p.max_iterations,
             newton: match p.newton {
+                NewtonKind::PerStep => NewtonSetting::PerStep,
                 NewtonKind::Full => NewtonSetting::Full,
                 NewtonKind::Modified => NewtonSetting::Modified,
             },
@@ -590,6 +595,7 @@ impl Scene {
                 i.tolerance = f.integrator.tolerance;
                 i.max_iterations = f.integrator.max_iterations;
                 i.newton = match f.integrator.newton {
+                    NewtonSetting::PerStep => NewtonKind::PerStep,
                     NewtonSetting::Full => NewtonKind::Full,
                     NewtonSetting::Modified => NewtonKind::Modified,
                 };

@@ -151,7 +151,7 @@ fn reaction_moment_at<T: Real, S: Scene, const N: usize, const D: usize>(
     // matrix rows alone, and the axial force without its tangent. Bit-identical to taking
     // row 3 of the full element residual.
     const ROW: usize = 3;
-    let b = &model.beam;
+    let b = &model.sys.beam;
     let (u, v, a) = (gather(q, 0), gather(v, 0), gather(a, 0));
     let at = |x: &ElementVector<T>| x.get(ROW).copied().unwrap_or(T::zero());
     let g_eff = model.params().gravity + base_accel;
@@ -180,7 +180,7 @@ pub fn root_curvature<T: Real, S: Scene, const N: usize, const D: usize>(
     model: &Model<T, S, N, D>,
 ) -> T {
     let u = gather(&model.state().q, 0);
-    model.beam.element.curvature_vector(&u, T::zero()).y
+    model.sys.beam.element.curvature_vector(&u, T::zero()).y
 }
 
 /// Signed root curvature of an arbitrary configuration `q` of `model` (e.g. its static
@@ -190,6 +190,7 @@ pub fn root_curvature_of<T: Real, S: Scene, const N: usize, const D: usize>(
     q: &nalgebra::SVector<T, D>,
 ) -> T {
     model
+        .sys
         .beam
         .element
         .curvature_vector(&gather(q, 0), T::zero())

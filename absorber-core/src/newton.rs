@@ -1,0 +1,352 @@
+//! Newton iterations on the Newmark (or static, or acceleration) equations, with a factored
+//! Newton matrix that is reused while it still contracts, and damping beyond a trust radius.
+//!
+//! **Reuse rule** (the same in the full solver, `host-sim/src/full`). An iteration either
+//! *refreshes* — assembles the residual and the exact Newton matrix at the current iterate and
+//! factors it — or *reuses* the latest factors with a residual alone (no dual numbers, no axial
+//! tangent: about a third of the work). A reused matrix must contract the correction by half:
+//! if `‖dx_k‖ > ½ ‖dx_{k−1}‖` the correction is not taken and the next iteration refreshes at
+//! the same iterate. Which factors may be reused ([`NewtonKind`]):
+//! - `PerStep` (default): the first iteration of a step refreshes; every later iteration and
+//!   every sub-solve of the same step (an impact's impulse, its consistent acceleration and the
+//!   rest of the step) may reuse, whatever their Newmark coefficients — the guard catches a
+//!   matrix that no longer fits. One factorization per step is the rule, not the exception.
+//! - `Modified`: as `PerStep`, and a step may also start from the previous steps' factors when
+//!   they were built for the same step length and contact.
+//! - `Full`: every iteration refreshes (the paper's Newton–Raphson; the reference).
+//!
+//! **State invariants.** Factors built during a step go to a scratch slot; the slot that
+//! modified Newton keeps between steps is replaced only when the step succeeds
+//! ([`Workspace::commit`]), so a rejected sample leaves every later step bit for bit as if it
+//! had never been offered.
+
+use crate::error::Error;
+use crate::linalg::{self, Pivoting};
+use crate::model::Contact;
+use crate::params::NewtonKind;
+use crate::scalar::{is_positive, lit, to_f64, Real};
+use crate::scene::Scene;
+use crate::system::{Problem, System};
+use nalgebra::{SMatrix, SVector};
+
+/// Trust radius of a Newton correction, in units of the beam length for positions and in
+/// radians for slopes and angles: a correction beyond it is damped ([`damping`]), never
+/// below it. A linearization about a state with a large (transient) axial force can be nearly
+/// singular in bending, and its raw correction would leave the physical range.
+pub const MAX_STEP: f64 = 0.05;
+
+/// Most damping factors tried per Newton iteration (λ = 1, ½, …, 1/2048), each one residual and one
+/// back-substitution: the work per iteration stays bounded.
+pub const DAMPING_TRIALS: u32 = 12;
+
+/// A reused matrix's iteration is converged when its estimated remaining error
+/// `θ/(1−θ)‖dx‖` is below `SETTLE · tolerance` (and `‖dx‖` below the tolerance).
+pub const SETTLE: f64 = 0.01;
+
+/// What a factored matrix was built for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Key<T> {
+    c_q: T,
+    contact: Contact,
+}
+
+/// One factored Newton matrix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Factors<T, const D: usize> {
+    lu: SMatrix<T, D, D>,
+    pivoting: Pivoting<D>,
+    key: Option<Key<T>>,
+}
+
+/// The Newton matrices of a model: not part of the state, but kept inside the model so that
+/// `step` neither builds nor copies a matrix on the stack.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Workspace<T, const D: usize> {
+    slots: [Factors<T, D>; 2],
+    /// The slot modified Newton keeps between steps.
+    kept: usize,
+    /// The slot the next iteration may reuse, if any.
+    current: Option<usize>,
+    /// Factors were built during this step (they go to slot `1 − kept`).
+    built: bool,
+}
+
+impl<T: Real, const D: usize> Default for Workspace<T, D> {
+    fn default() -> Self {
+        let empty = Factors {
+            lu: SMatrix::zeros(),
+            pivoting: Pivoting::None,
+            key: None,
+        };
+        Self {
+            slots: [empty, empty],
+            kept: 0,
+            current: None,
+            built: false,
+        }
+    }
+}
+
+impl<T: Real, const D: usize> Workspace<T, D> {
+    /// Forgets every factorization (after a restart or a new state: nothing may be reused).
+    pub(crate) fn clear(&mut self) {
+        for s in self.slots.iter_mut() {
+            s.key = None;
+        }
+        self.current = None;
+        self.built = false;
+    }
+
+    /// Starts a step: modified Newton may reuse the kept factors, the others start afresh.
+    pub(crate) fn begin_step(&mut self, kind: NewtonKind) {
+        self.built = false;
+        self.current = match kind {
+            NewtonKind::Modified => Some(self.kept),
+            NewtonKind::PerStep | NewtonKind::Full => None,
+        };
+    }
+
+    /// Starts a solve outside a step (static, initial acceleration): build fresh factors.
+    pub(crate) fn begin_solve(&mut self) {
+        self.built = false;
+        self.current = None;
+    }
+
+    /// The step succeeded: modified Newton keeps the newest factors.
+    pub(crate) fn commit(&mut self) {
+        if self.built {
+            self.kept = 1 - self.kept;
+        }
+        self.built = false;
+    }
+
+    fn scratch(&self) -> usize {
+        1 - self.kept
+    }
+
+    /// Whether the latest factors may serve problem `p`.
+    fn can_reuse(&self, p: &Problem<'_, T, D>) -> bool {
+        let Some(slot) = self.current.and_then(|i| self.slots.get(i)) else {
+            return false;
+        };
+        match slot.key {
+            // Built in this step: any Newmark coefficients (the guard checks the fit).
+            Some(k) if self.built => k.contact == p.contact,
+            // Kept from earlier steps: the same step length and contact only.
+            Some(k) => k.contact == p.contact && k.c_q == p.ch.c_q,
+            None => false,
+        }
+    }
+
+    /// Solves `J dx = b` in place with the latest factors.
+    pub(crate) fn solve(&self, b: &mut SVector<T, D>) -> Result<(), Error> {
+        let f = self
+            .current
+            .and_then(|i| self.slots.get(i))
+            .ok_or(Error::Singular)?;
+        if f.key.is_some() && linalg::solve(&f.lu, &f.pivoting, b) {
+            Ok(())
+        } else {
+            Err(Error::Singular)
+        }
+    }
+
+    /// Whether factors exist for the contact state `contact` (built in this step).
+    pub(crate) fn has_step_factors(&self, contact: Contact) -> bool {
+        self.current
+            .and_then(|i| self.slots.get(i))
+            .and_then(|f| f.key)
+            .is_some_and(|k| k.contact == contact)
+    }
+}
+
+/// Result of one Newton solve.
+pub(crate) struct Solved<T, const D: usize> {
+    pub x: SVector<T, D>,
+    pub iterations: u32,
+    pub increment: T,
+}
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
+    /// Assembles the residual and Newton matrix of `p` at `x` into the scratch slot, factors it
+    /// (banded; partial pivoting when a pivot is too small) and makes it the current factors.
+    pub(crate) fn refresh_at(
+        &self,
+        p: &Problem<'_, T, D>,
+        qva: &[SVector<T, D>; 3],
+        ws: &mut Workspace<T, D>,
+        r: &mut SVector<T, D>,
+    ) -> Result<(), Error> {
+        let i = ws.scratch();
+        ws.current = Some(i);
+        ws.built = true;
+        let slot = ws.slots.get_mut(i).ok_or(Error::Singular)?;
+        slot.key = None;
+        let [q, v, a] = qva;
+        self.residual_and_jacobian(
+            [q, v, a],
+            p.g_eff,
+            &p.ch,
+            p.contact,
+            p.plumb,
+            r,
+            &mut slot.lu,
+        );
+        slot.pivoting = if linalg::factor_banded(&mut slot.lu, self.pivot_ratio) {
+            Pivoting::None
+        } else {
+            // Rare: rebuild the matrix (the banded elimination destroyed it) and pivot.
+            self.residual_and_jacobian(
+                [q, v, a],
+                p.g_eff,
+                &p.ch,
+                p.contact,
+                p.plumb,
+                r,
+                &mut slot.lu,
+            );
+            Pivoting::Rows(linalg::factor_pivoted(&mut slot.lu).ok_or(Error::Singular)?)
+        };
+        slot.key = Some(Key {
+            c_q: p.ch.c_q,
+            contact: p.contact,
+        });
+        Ok(())
+    }
+
+    /// Newton on `x` (from the guess `x`) for problem `p`. Convergence:
+    /// `max_i |c_pos Δx_i| / scale_i ≤ tolerance`. `kind` says whether factors may be reused
+    /// (see the module doc). `step_solve`: a Newmark solve, which may accept its budget
+    /// ([`crate::Integrator::accept_after_budget`]).
+    pub(crate) fn newton(
+        &self,
+        p: &Problem<'_, T, D>,
+        mut x: SVector<T, D>,
+        ws: &mut Workspace<T, D>,
+        kind: NewtonKind,
+        step_solve: bool,
+    ) -> Result<Solved<T, D>, Error> {
+        let max = self.params.integrator.max_iterations;
+        let tol = self.params.integrator.tolerance;
+        let half = lit::<T>(0.5);
+        let mut increment = T::zero();
+        let mut previous = T::zero();
+        let mut refresh = false;
+        let mut qva = [SVector::<T, D>::zeros(); 3];
+        let mut dx = SVector::<T, D>::zeros();
+        for it in 1..=max {
+            p.at(&x, &mut qva);
+            let reuse = !refresh && kind != NewtonKind::Full && ws.can_reuse(p);
+            if reuse {
+                let [q, v, a] = &qva;
+                self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut dx);
+            } else {
+                self.refresh_at(p, &qva, ws, &mut dx)?;
+            }
+            if !dx.as_slice().iter().all(|z| z.is_finite()) {
+                return Err(Error::NonFiniteState);
+            }
+            dx.neg_mut();
+            ws.solve(&mut dx)?;
+            let norm = self.scaled_norm(&dx, p.c_pos);
+            if reuse && it > 1 && norm > previous * half {
+                // Not taken: the reused matrix no longer fits; refresh at the same iterate.
+                increment = norm;
+                refresh = true;
+                continue;
+            }
+            refresh = false;
+            let lambda = if norm > self.max_step {
+                self.damping(p, &x, &dx, norm, ws)
+            } else {
+                T::one()
+            };
+            x.axpy(lambda, &dx, T::one());
+            increment = norm;
+            // A fresh matrix's correction converges quadratically: what is left after it is far
+            // below `tol`. A reused one's converges linearly with the observed contraction
+            // θ = ‖dx_k‖/‖dx_{k−1}‖, and leaves ≈ θ/(1−θ)‖dx_k‖ (Hairer & Wanner, *Solving
+            // ODEs II*, IV.8): demand that be below `tol`/100 too, so that the solution is as
+            // close to the exact discrete one as full Newton's.
+            let settled = !reuse || it == 1 || {
+                let theta = norm / previous;
+                theta * norm <= (T::one() - theta) * tol * self.settle
+            };
+            if norm <= tol && settled {
+                return Ok(Solved {
+                    x,
+                    iterations: it,
+                    increment,
+                });
+            }
+            previous = norm;
+        }
+        if self.params.integrator.accept_after_budget && step_solve {
+            return Ok(Solved {
+                x,
+                iterations: max,
+                increment,
+            });
+        }
+        Err(Error::NoConvergence {
+            iterations: max,
+            increment: to_f64(increment),
+        })
+    }
+
+    /// Damping factor λ of a Newton correction `dx` larger than the trust radius `MAX_STEP`:
+    /// Deuflhard's affine-invariant natural monotonicity test (Deuflhard 2004, *Newton Methods
+    /// for Nonlinear Problems*, §3.3): accept λ when the simplified correction at `x + λ dx`,
+    /// `−J⁻¹ r(x + λ dx)` with the same factors, is smaller than `(1 − λ/4)` times `dx` (in the
+    /// scaled norm); otherwise halve λ. After [`DAMPING_TRIALS`] trials, or when λ‖dx‖ reaches
+    /// the trust radius [`MAX_STEP`], it takes λ = MAX_STEP/‖dx‖ (the plain trust-region cap).
+    ///
+    /// Why: the plain cap alone limits the whole correction by its largest scaled entry. In a
+    /// violent step (3.4 g at resonance, ball spinning at 85 rad/s) that entry is the ball's
+    /// spin φ, whose linearized response to the beam's correction is ≈ 35 times larger; the beam
+    /// then converged by 5 % per iteration while the spin's target ran away, and Newton failed
+    /// after 100 iterations where the undamped correction converges in 6 (docs/stability.md).
+    ///
+    /// Not inlined: it runs only on violent steps, and inlined it would grow the stack frame
+    /// and the code of every Newton iteration.
+    #[inline(never)]
+    fn damping(
+        &self,
+        p: &Problem<'_, T, D>,
+        x: &SVector<T, D>,
+        dx: &SVector<T, D>,
+        norm: T,
+        ws: &Workspace<T, D>,
+    ) -> T {
+        let floor = self.max_step / norm;
+        let (one, quarter) = (T::one(), lit::<T>(0.25));
+        let mut lambda = one;
+        let mut qva = [SVector::<T, D>::zeros(); 3];
+        let mut bar = SVector::<T, D>::zeros();
+        for _ in 0..DAMPING_TRIALS {
+            if lambda <= floor {
+                break;
+            }
+            let mut xt = *x;
+            xt.axpy(lambda, dx, one);
+            p.at(&xt, &mut qva);
+            let [q, v, a] = &qva;
+            self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut bar);
+            if bar.as_slice().iter().all(|z| z.is_finite()) {
+                bar.neg_mut();
+                if ws.solve(&mut bar).is_ok() {
+                    let nb = self.scaled_norm(&bar, p.c_pos);
+                    if nb <= (one - lambda * quarter) * norm {
+                        return lambda;
+                    }
+                }
+            }
+            lambda *= lit::<T>(0.5);
+        }
+        if is_positive(floor) {
+            floor
+        } else {
+            one
+        }
+    }
+}

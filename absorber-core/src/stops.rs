@@ -1,0 +1,277 @@
+//! The ±stops of the free ball (paper §3.5; MODEL.md, MODEL-DERIVATION §6): crossing, impact,
+//! stick and release.
+//!
+//! A step whose trial end has the ball beyond a stop is split at the crossing:
+//! 1. the crossing fraction τ is the root of the cubic Hermite interpolant of α = θ − ψ
+//!    through both step ends with their rates ([`System::crossing_fraction`]);
+//! 2. a Newmark sub-step of length τh reaches the crossing;
+//! 3. the impact ([`System::impact`]) projects the ball onto the stop and applies the impulse
+//!    with the step's factored Newton matrix `W = M + γhC + βh²K` (no new factorization);
+//! 4. the consistent acceleration after the impulse and the Newmark rest of the step,
+//!    `(1 − τ)h`, follow.
+//!
+//! Every solve of the split step starts from the step's factors and refreshes them only when
+//! they stop contracting ([`crate::newton`]): an impact step costs about three ordinary steps
+//! of residuals but one or two factorizations (docs/embedded.md measures it).
+//!
+//! A ball resting on a stop is held there (`φ = ψ − (ρ/r_b) α_stop`) until the stop would have
+//! to pull it.
+
+use crate::error::Error;
+use crate::model::{Contact, Impact, Side, State, StepReport};
+use crate::newton::Workspace;
+use crate::params::ImpactModel;
+use crate::scalar::{is_positive, lit, Real};
+use crate::scene::Scene;
+use crate::system::{Problem, System};
+use crate::tip::{self, Chain};
+use nalgebra::SVector;
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
+    /// The stop events of a step from `start` whose trial end is `next`: an impact when the
+    /// ball crossed a stop, a release when a held ball would be pulled.
+    pub(crate) fn stop_events(
+        &self,
+        start: &State<T, D>,
+        next: State<T, D>,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<State<T, D>, Error> {
+        if !(S::STOPS && S::EXTRA_DOFS == 1) {
+            return Ok(next);
+        }
+        match next.contact {
+            Contact::Off => {
+                if self.relative_angle(&next).abs() > self.params.ball.stop_angle {
+                    return self.impact_step(start, &next, base_accel, ws, report);
+                }
+                Ok(next)
+            }
+            Contact::OnStop(side) => {
+                let mut next = next;
+                if side.sign::<T>() * self.contact_force(&next) > T::zero() {
+                    next.contact = Contact::Off;
+                }
+                Ok(next)
+            }
+        }
+    }
+
+    /// Splits a step that crossed a stop (module doc).
+    fn impact_step(
+        &self,
+        start: &State<T, D>,
+        trial: &State<T, D>,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<State<T, D>, Error> {
+        let kind = self.params.integrator.newton;
+        let h = self.params.integrator.step;
+        let stop = self.params.ball.stop_angle;
+        let side = if self.relative_angle(trial) > T::zero() {
+            Side::Positive
+        } else {
+            Side::Negative
+        };
+        let tau = self.crossing_fraction(start, trial, h, side.sign::<T>() * stop);
+        let h1 = tau * h;
+        let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
+        let mut mid = if h1 > h * lit(1e-6) {
+            let (m, s) = self.newmark(start, h1, accel_mid, ws, kind)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            m
+        } else {
+            *start
+        };
+        mid.time = start.time + h1;
+        let impact = self.impact(&mut mid, side, ws)?;
+        if !impact.stuck {
+            let acc = self.consistent_acceleration(&mid, ws, kind)?;
+            report.iterations += acc.iterations;
+            mid.a = acc.x;
+        }
+        let rest = h - tau * h;
+        let mut end = if rest > h * lit(1e-6) {
+            let (e, s) = self.newmark(&mid, rest, base_accel, ws, kind)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            e
+        } else {
+            mid
+        };
+        // A second crossing within the same (remaining) step: the ball came straight back
+        // onto the stop; end the step with it resting there (plastic).
+        if end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
+            let side2 = if self.relative_angle(&end) > T::zero() {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            self.hold_on_stop(&mut end, side2);
+            end.contact = Contact::OnStop(side2);
+            let acc = self.consistent_acceleration(&end, ws, kind)?;
+            report.iterations += acc.iterations;
+            end.a = acc.x;
+            if side2.sign::<T>() * self.contact_force(&end) > T::zero() {
+                end.contact = Contact::Off;
+            }
+        }
+        report.impact = Some(impact);
+        Ok(end)
+    }
+
+    /// Fraction τ ∈ \[0, 1\] of the step at which α reaches `target`: root of the cubic Hermite
+    /// interpolant of α through both step ends with their rates (error O(h⁴); a linear
+    /// interpolant, error O(h²), misplaces the ball by ~α̈h²/8, which the projection onto the
+    /// stop then turns into a potential-energy error).
+    fn crossing_fraction(&self, start: &State<T, D>, end: &State<T, D>, h: T, target: T) -> T {
+        let (a0, a1) = (
+            self.relative_angle(start) - target,
+            self.relative_angle(end) - target,
+        );
+        let (d0, d1) = (self.relative_rate(start) * h, self.relative_rate(end) * h);
+        let (two, three, six) = (lit::<T>(2.0), lit::<T>(3.0), lit::<T>(6.0));
+        let linear = a0 / (a0 - a1);
+        let mut tau = if linear.is_finite() {
+            linear.max(T::zero()).min(T::one())
+        } else {
+            T::zero()
+        };
+        for _ in 0..6 {
+            let (t2, t3) = (tau * tau, tau * tau * tau);
+            let p = (two * t3 - three * t2 + T::one()) * a0
+                + (t3 - two * t2 + tau) * d0
+                + (three * t2 - two * t3) * a1
+                + (t3 - t2) * d1;
+            let dp = (six * t2 - six * tau) * (a0 - a1)
+                + (three * t2 - lit::<T>(4.0) * tau + T::one()) * d0
+                + (three * t2 - two * tau) * d1;
+            if !is_positive(dp.abs()) {
+                break;
+            }
+            let next = tau - p / dp;
+            if !next.is_finite() {
+                break;
+            }
+            tau = next.max(T::zero()).min(T::one());
+        }
+        tau
+    }
+
+    /// Stop impact (MODEL.md, MODEL-DERIVATION §6): projects the ball onto the stop, applies the
+    /// generalized impulse `Λ = −(1+e) Ġ⁻ / (∇G W⁻¹ ∇Gᵀ)` along `∇G = ∂(θ − ψ)/∂q`,
+    /// `q̇⁺ = q̇⁻ + W⁻¹ ∇Gᵀ Λ`, and decides whether the ball stays on the stop. `W` is the
+    /// step's factored Newmark matrix ([`ImpactModel::OverStep`]) or the mass matrix at the
+    /// impact ([`ImpactModel::Instantaneous`]); either way `Ġ⁺ = −e Ġ⁻` exactly.
+    pub(crate) fn impact(
+        &self,
+        s: &mut State<T, D>,
+        side: Side,
+        ws: &mut Workspace<T, D>,
+    ) -> Result<Impact<T>, Error> {
+        let ball = &self.params.ball;
+        let lock = side.sign::<T>() * ball.stop_angle;
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, _) = tip::psi_and_rate(&x);
+        if let Some(spin) = s.q.get_mut(Self::SPIN) {
+            *spin = psi - lock / self.inertia.orbit_per_spin;
+        }
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let grad_local = tip::gap_gradient(&self.inertia, &x);
+        let mut grad = SVector::<T, D>::zeros();
+        if let Some(dst) = grad.as_mut_slice().get_mut(Self::END..) {
+            for (g, gk) in dst.iter_mut().zip(grad_local.iter()) {
+                *g = *gk;
+            }
+        }
+        let speed = grad.dot(&s.v);
+        let mut impact = Impact {
+            time: s.time,
+            side,
+            relative_speed: speed,
+            impulse: T::zero(),
+            energy_loss: T::zero(),
+            stuck: false,
+        };
+        let plastic = speed.abs() < ball.stick_speed;
+        if side.sign::<T>() * speed > T::zero() {
+            let e = if plastic { T::zero() } else { ball.restitution };
+            let mut y = grad;
+            self.impulse_matrix(s, ws)?;
+            ws.solve(&mut y)?;
+            let w = grad.dot(&y);
+            if !is_positive(w) {
+                return Err(Error::Singular);
+            }
+            let lambda = -(T::one() + e) * speed / w;
+            s.v.axpy(lambda, &y, T::one());
+            // Λ is conjugate to α (N·m·s); the contact point moves at ρ α̇ along the track.
+            impact.impulse = lambda / ball.path_radius();
+            impact.energy_loss = lit::<T>(0.5) * (T::one() - e * e) * speed * speed / w;
+        }
+        s.contact = Contact::Off;
+        if plastic {
+            // Stay on the stop if the contact force is compressive.
+            let mut held = *s;
+            held.contact = Contact::OnStop(side);
+            self.hold_on_stop(&mut held, side);
+            let acc = self.consistent_acceleration(&held, ws, self.params.integrator.newton)?;
+            held.a = acc.x;
+            if side.sign::<T>() * self.contact_force(&held) <= T::zero() {
+                *s = held;
+                impact.stuck = true;
+            }
+        }
+        Ok(impact)
+    }
+
+    /// Makes the impulse metric the current factors: the step's Newmark matrix when it is
+    /// there (over-step model), else a fresh one (or the mass matrix) at the impact state.
+    fn impulse_matrix(&self, s: &State<T, D>, ws: &mut Workspace<T, D>) -> Result<(), Error> {
+        let over_step = self.params.ball.impact_model == ImpactModel::OverStep;
+        if over_step && ws.has_step_factors(Contact::Off) {
+            return Ok(());
+        }
+        let ch = if over_step {
+            self.newmark_chain(self.params.integrator.step)
+        } else {
+            Chain {
+                c_q: T::zero(),
+                c_v: T::zero(),
+                c_m: T::one(),
+            }
+        };
+        let zero = SVector::zeros();
+        let p = Problem {
+            q0: &s.q,
+            v0: &s.v,
+            a0: &zero,
+            ch,
+            c_pos: T::one(),
+            g_eff: self.effective_gravity(s.base_accel),
+            contact: Contact::Off,
+            plumb: false,
+        };
+        let mut r = SVector::zeros();
+        self.refresh_at(&p, &[s.q, s.v, s.a], ws, &mut r)
+    }
+
+    /// Projects a ball resting on a stop onto α = side·α_max: φ = ψ − (ρ/r_b) α, φ̇ = ψ̇, φ̈ = ψ̈.
+    pub(crate) fn hold_on_stop(&self, s: &mut State<T, D>, side: Side) {
+        let (psi, rate, acc) = tip::psi_all(&Self::local(&s.q, &s.v, &s.a));
+        let lock = side.sign::<T>() * self.params.ball.stop_angle;
+        let k = self.inertia.orbit_per_spin;
+        if let (Some(q), Some(v), Some(a)) = (
+            s.q.get_mut(Self::SPIN),
+            s.v.get_mut(Self::SPIN),
+            s.a.get_mut(Self::SPIN),
+        ) {
+            *q = psi - lock / k;
+            *v = rate;
+            *a = acc;
+        }
+    }
+}

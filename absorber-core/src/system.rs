@@ -1,0 +1,292 @@
+//! The equations of motion of a scene: residual `r(q, q̇, q̈)` and Newton matrix, assembled from
+//! the beam ([`crate::beam`]) and the tip body and ball ([`crate::tip`]).
+//!
+//! [`System`] holds everything that stays fixed during a run (parameters, the beam's
+//! precomputed element data, the tip inertia, the static equilibrium, the unknowns' scales);
+//! the step path borrows it immutably next to the Newton workspace
+//! ([`crate::newton::Workspace`]) and the state.
+
+use crate::beam::Beam;
+use crate::dual::Plain;
+use crate::error::Error;
+use crate::linalg::PIVOT_RATIO;
+use crate::model::{Contact, State};
+use crate::newton::MAX_STEP;
+use crate::params::Params;
+use crate::scalar::{lit, Real};
+use crate::scene::{BallKind, Scene};
+use crate::tip::{self, BallMode, Chain, LocalState, TipInertia, D5, LOCAL};
+use core::marker::PhantomData;
+use nalgebra::{SMatrix, SVector};
+
+/// What stays fixed during a run of scene `S` with `N` elements and `D` unknowns.
+#[derive(Clone, Debug)]
+pub struct System<T, S, const N: usize, const D: usize> {
+    pub(crate) params: Params<T>,
+    pub(crate) beam: Beam<T>,
+    pub(crate) inertia: TipInertia<T>,
+    /// Static equilibrium (zero relative velocity) the run started from.
+    pub(crate) equilibrium: SVector<T, D>,
+    /// Scale of each unknown for the convergence test: beam length for positions, 1 otherwise.
+    pub(crate) scale: SVector<T, D>,
+    /// [`PIVOT_RATIO`] and [`MAX_STEP`] in the scalar (converted once, not per step).
+    pub(crate) pivot_ratio: T,
+    pub(crate) max_step: T,
+    /// [`crate::newton::SETTLE`] in the scalar.
+    pub(crate) settle: T,
+    _scene: PhantomData<S>,
+}
+
+/// What a Newton solve solves: `r(q₀ + c_q x, v₀ + c_v x, a₀ + c_m x) = 0` for `x`, at
+/// effective gravity `g_eff`, in a contact state, the free ball optionally pinned plumb; `c_pos`
+/// converts `x` to a position for the convergence test.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Problem<'a, T, const D: usize> {
+    pub q0: &'a SVector<T, D>,
+    pub v0: &'a SVector<T, D>,
+    pub a0: &'a SVector<T, D>,
+    pub ch: Chain<T>,
+    pub c_pos: T,
+    pub g_eff: T,
+    pub contact: Contact,
+    pub plumb: bool,
+}
+
+impl<T: Real, const D: usize> Problem<'_, T, D> {
+    /// `(q, v, a)` at the unknown `x`.
+    #[inline]
+    pub fn at(&self, x: &SVector<T, D>, out: &mut [SVector<T, D>; 3]) {
+        let [q, v, a] = out;
+        fn sl<T, const D: usize>(x: &SVector<T, D>) -> core::slice::Iter<'_, T> {
+            x.as_slice().iter()
+        }
+        let outs = q.as_mut_slice().iter_mut();
+        let outs = outs
+            .zip(v.as_mut_slice().iter_mut())
+            .zip(a.as_mut_slice().iter_mut());
+        let ins = sl(x).zip(sl(self.q0).zip(sl(self.v0)).zip(sl(self.a0)));
+        for (((qi, vi), ai), (xi, ((q0, v0), a0))) in outs.zip(ins) {
+            *qi = *q0 + *xi * self.ch.c_q;
+            *vi = *v0 + *xi * self.ch.c_v;
+            *ai = *a0 + *xi * self.ch.c_m;
+        }
+    }
+}
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
+    /// Index of the end node's first coordinate.
+    pub(crate) const END: usize = 4 * N - 4;
+    /// Index of the ball spin φ (free ball only).
+    pub(crate) const SPIN: usize = 4 * N;
+
+    /// Precomputes the fixed data from validated parameters.
+    pub(crate) fn new(params: Params<T>) -> Self {
+        let n: T = lit(N as f64);
+        let b = &params.beam;
+        let element = crate::ancf::Element {
+            length: b.length / n,
+            axial_rigidity: b.modulus * b.area,
+            bending_rigidity: b.modulus * b.inertia,
+            mass_per_length: b.mass / b.length,
+        };
+        let mut scale = SVector::<T, D>::from_element(T::one());
+        for node in 0..N {
+            for c in 0..2 {
+                if let Some(s) = scale.get_mut(4 * node + c) {
+                    *s = b.length;
+                }
+            }
+        }
+        Self {
+            inertia: TipInertia::new(&params, S::HAS_TIP, S::BALL),
+            beam: Beam::new(element, params.damping.stiffness_proportional),
+            params,
+            equilibrium: SVector::zeros(),
+            scale,
+            pivot_ratio: lit(PIVOT_RATIO),
+            max_step: lit(MAX_STEP),
+            settle: lit(crate::newton::SETTLE),
+            _scene: PhantomData,
+        }
+    }
+
+    /// The tip's five local coordinates (end node, spin) of a global state.
+    pub(crate) fn local(q: &SVector<T, D>, v: &SVector<T, D>, a: &SVector<T, D>) -> LocalState<T> {
+        let mut x = LocalState {
+            q: [T::zero(); LOCAL],
+            v: [T::zero(); LOCAL],
+            a: [T::zero(); LOCAL],
+        };
+        let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
+        let end = Self::END;
+        for (src, dst) in [(q, &mut x.q), (v, &mut x.v), (a, &mut x.a)] {
+            if let Some(s) = src.as_slice().get(end..end + n) {
+                for (d, v) in dst.iter_mut().zip(s.iter()) {
+                    *d = *v;
+                }
+            }
+        }
+        x
+    }
+
+    fn ball_mode(&self, contact: Contact, plumb: bool) -> BallMode<T> {
+        match (S::BALL, contact) {
+            (BallKind::None, _) => BallMode::Absent,
+            (BallKind::Locked, _) => BallMode::Held(T::zero()),
+            (BallKind::Free, Contact::Off) if plumb => BallMode::Plumb,
+            (BallKind::Free, Contact::Off) => BallMode::Free,
+            (BallKind::Free, Contact::OnStop(side)) => {
+                BallMode::Held(side.sign::<T>() * self.params.ball.stop_angle)
+            }
+        }
+    }
+
+    /// Residual of the equations of motion at `(q, v, a)` into `r` (overwritten); returns the
+    /// generalized contact force on the ball along θ.
+    pub(crate) fn residual(
+        &self,
+        qva: [&SVector<T, D>; 3],
+        g_eff: T,
+        contact: Contact,
+        plumb: bool,
+        r: &mut SVector<T, D>,
+    ) -> T {
+        let [q, v, a] = qva;
+        r.fill(T::zero());
+        self.beam.residual(N, (q, v, a), g_eff, r);
+        if !S::HAS_TIP {
+            return T::zero();
+        }
+        let x = Self::local(q, v, a);
+        let mode = self.ball_mode(contact, plumb);
+        let zero = T::zero();
+        let ch = Chain {
+            c_q: zero,
+            c_v: zero,
+            c_m: zero,
+        };
+        let (rows, force) =
+            tip::residual::<T, Plain<T>>(&self.inertia, &x, &ch, g_eff, mode, S::EXTRA_DOFS == 1);
+        if let Some(dst) = r.as_mut_slice().get_mut(Self::END..) {
+            for (d, row) in dst.iter_mut().zip(rows.iter()) {
+                *d += row.0;
+            }
+        }
+        force
+    }
+
+    /// Residual into `r` and the Newton matrix `c_m ∂r/∂a + c_v ∂r/∂v + c_q ∂r/∂q` into `jac`
+    /// (both overwritten); returns the generalized contact force on the ball along θ. The tip
+    /// rows run in dual numbers (exact derivatives).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn residual_and_jacobian(
+        &self,
+        qva: [&SVector<T, D>; 3],
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+        plumb: bool,
+        r: &mut SVector<T, D>,
+        jac: &mut SMatrix<T, D, D>,
+    ) -> T {
+        let [q, v, a] = qva;
+        r.fill(T::zero());
+        jac.fill(T::zero());
+        self.beam
+            .residual_and_jacobian(N, (q, v, a), g_eff, ch, r, jac);
+        if !S::HAS_TIP {
+            return T::zero();
+        }
+        let x = Self::local(q, v, a);
+        let mode = self.ball_mode(contact, plumb);
+        let (rows, force) =
+            tip::residual::<T, D5<T>>(&self.inertia, &x, ch, g_eff, mode, S::EXTRA_DOFS == 1);
+        let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
+        let data = jac.as_mut_slice();
+        for (i, row) in rows.iter().enumerate().take(n) {
+            if let Some(dst) = r.get_mut(Self::END + i) {
+                *dst += row.re;
+            }
+            for (j, d) in row.du.iter().enumerate().take(n) {
+                if let Some(dst) = data.get_mut((Self::END + j) * D + Self::END + i) {
+                    *dst += *d;
+                }
+            }
+        }
+        force
+    }
+
+    /// Residual, Newton matrix and contact force by value (off the step path: modes, tests).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn assemble(
+        &self,
+        q: &SVector<T, D>,
+        v: &SVector<T, D>,
+        a: &SVector<T, D>,
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+        plumb: bool,
+    ) -> (SVector<T, D>, SMatrix<T, D, D>, T) {
+        let mut r = SVector::zeros();
+        let mut jac = SMatrix::zeros();
+        let f = self.residual_and_jacobian([q, v, a], g_eff, ch, contact, plumb, &mut r, &mut jac);
+        (r, jac, f)
+    }
+
+    /// Effective gravity `g + ÿ_b` \[m/s²\] (the frame translating with the base).
+    #[inline]
+    pub(crate) fn effective_gravity(&self, base_accel: T) -> T {
+        self.params.gravity + base_accel
+    }
+
+    /// `max_i |c_pos d_i| / scale_i`: a position increment in scaled units.
+    pub(crate) fn scaled_norm(&self, d: &SVector<T, D>, c_pos: T) -> T {
+        let mut n = T::zero();
+        for (di, s) in d.as_slice().iter().zip(self.scale.as_slice().iter()) {
+            let e = (*di * c_pos).abs() / *s;
+            if e > n {
+                n = e;
+            }
+        }
+        n
+    }
+
+    /// Generalized contact force the stop (or housing) puts on the ball along θ in a state.
+    pub(crate) fn contact_force(&self, s: &State<T, D>) -> T {
+        let mut r = SVector::zeros();
+        let g = self.effective_gravity(s.base_accel);
+        self.residual([&s.q, &s.v, &s.a], g, s.contact, false, &mut r)
+    }
+
+    /// Relative ball angle α = θ − ψ = (r_b/ρ)(ψ − φ) of a state (0 without a free ball) \[rad\].
+    pub(crate) fn relative_angle(&self, s: &State<T, D>) -> T {
+        if S::EXTRA_DOFS != 1 {
+            return T::zero();
+        }
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, _) = tip::psi_and_rate(&x);
+        self.inertia.orbit_per_spin * (psi - x.q[4])
+    }
+
+    /// Relative ball angle rate α̇ = (r_b/ρ)(ψ̇ − φ̇) \[rad/s\].
+    pub(crate) fn relative_rate(&self, s: &State<T, D>) -> T {
+        if S::EXTRA_DOFS != 1 {
+            return T::zero();
+        }
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (_, rate) = tip::psi_and_rate(&x);
+        self.inertia.orbit_per_spin * (rate - x.v[4])
+    }
+
+    /// The state is finite (checked on the slices: nalgebra's strided iterator costs ~40
+    /// instructions an entry on the M4).
+    pub(crate) fn is_finite(s: &State<T, D>) -> Result<(), Error> {
+        let all = |x: &SVector<T, D>| x.as_slice().iter().all(|z| z.is_finite());
+        if all(&s.q) && all(&s.v) && all(&s.a) {
+            Ok(())
+        } else {
+            Err(Error::NonFiniteState)
+        }
+    }
+}

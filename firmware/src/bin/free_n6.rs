@@ -1,0 +1,18 @@
+//! `fw-free-n6`: the free-ball scene on 6 elements, D = 25 (what a finer beam costs).
+//!
+//! On `thumbv7em-none-eabihf` this is the firmware; on the host it prints the reference.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+type M = absorber_core::FreeBallModel<f32, 6, 25>;
+
+#[cfg(target_os = "none")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    static mut MODEL: core::mem::MaybeUninit<M> = core::mem::MaybeUninit::uninit();
+    absorber_firmware::target::target_main::<M>(MODEL)
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    absorber_firmware::host_main::<M>()
+}
