@@ -449,15 +449,11 @@ impl<T: Real> AxialQuadrature<T> {
         f
     }
 
-    /// Axial force `Q_l` and its tangent `K_l`, whose entries are handed to `put(row, col,
-    /// value)` (local rows/columns 0..8, every entry of the symmetric matrix once).
-    pub fn tangent(
-        &self,
-        u: &ElementVector<T>,
-        mut put: impl FnMut(usize, usize, T),
-    ) -> ElementVector<T> {
+    /// Axial force `Q_l` and the 2×2 blocks of its tangent `K_l`: `blocks[i][j] = (xx, xy, yy)`
+    /// of block `(i, j)` for `j ≥ i` (the others by symmetry).
+    #[inline]
+    fn force_and_blocks(&self, u: &ElementVector<T>) -> (ElementVector<T>, [[[T; 3]; 4]; 4]) {
         let mut f = ElementVector::zeros();
-        // blocks[i][j] = (xx, xy, yy) of the 2×2 block (i, j), j ≥ i.
         let mut blocks = [[[T::zero(); 3]; 4]; 4];
         for (sx, w) in self.sx.iter().zip(self.weight.iter()) {
             let (d1, d2, eps) = Self::strain(sx, u);
@@ -479,6 +475,17 @@ impl<T: Real> AxialQuadrature<T> {
                 }
             }
         }
+        (f, blocks)
+    }
+
+    /// Axial force `Q_l` and its tangent `K_l`, whose entries are handed to `put(row, col,
+    /// value)` (local rows/columns 0..8, every entry of the symmetric matrix once).
+    pub fn tangent(
+        &self,
+        u: &ElementVector<T>,
+        mut put: impl FnMut(usize, usize, T),
+    ) -> ElementVector<T> {
+        let (f, blocks) = self.force_and_blocks(u);
         for (i, row) in blocks.iter().enumerate() {
             for (j, [xx, xy, yy]) in row.iter().enumerate().skip(i) {
                 let (r, c) = (2 * i, 2 * j);
@@ -491,6 +498,36 @@ impl<T: Real> AxialQuadrature<T> {
                     put(c + 1, r, *xy);
                     put(c, r + 1, *xy);
                     put(c + 1, r + 1, *yy);
+                }
+            }
+        }
+        f
+    }
+
+    /// Axial force `Q_l`, with `scale · K_l` added into the 8×8 `block` (rows of the element's
+    /// local coordinates): the step path's form of [`AxialQuadrature::tangent`].
+    pub fn add_tangent(
+        &self,
+        u: &ElementVector<T>,
+        scale: T,
+        block: &mut [[T; 8]; 8],
+    ) -> ElementVector<T> {
+        let (f, blocks) = self.force_and_blocks(u);
+        // Block (i, j) with j < i is block (j, i) transposed; a 2×2 block is symmetric itself.
+        for (i, rows) in block.chunks_exact_mut(2).enumerate() {
+            let [row_x, row_y] = rows else {
+                continue;
+            };
+            let pairs = row_x.chunks_exact_mut(2).zip(row_y.chunks_exact_mut(2));
+            for (j, (px, py)) in pairs.enumerate() {
+                let (a, b) = if j >= i { (i, j) } else { (j, i) };
+                if let (Some([xx, xy, yy]), [x0, x1], [y0, y1]) =
+                    (blocks.get(a).and_then(|r| r.get(b)), px, py)
+                {
+                    *x0 += scale * *xx;
+                    *x1 += scale * *xy;
+                    *y0 += scale * *xy;
+                    *y1 += scale * *yy;
                 }
             }
         }

@@ -14,9 +14,10 @@
 //! system's residual and Newton matrix (no element matrix is built on the step path).
 
 use crate::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector};
+use crate::linalg::BandMatrix;
 use crate::scalar::Real;
 use crate::tip::Chain;
-use nalgebra::{SMatrix, SVector};
+use nalgebra::SVector;
 
 /// Precomputed data of the uniform beam.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -56,14 +57,6 @@ pub fn gather<T: Real, const D: usize>(x: &SVector<T, D>, k: usize) -> ElementVe
         }
     }
     e
-}
-
-/// Adds `v` at `(row, col)` of a column-major `D×D` slice (nothing outside it).
-#[inline]
-fn add_at<T: Real>(m: &mut [T], d: usize, row: usize, col: usize, v: T) {
-    if let Some(x) = m.get_mut(col * d + row) {
-        *x += v;
-    }
 }
 
 impl<T: Real> Beam<T> {
@@ -106,14 +99,19 @@ impl<T: Real> Beam<T> {
         for (i, (mrow, krow)) in self.mass4.iter().zip(self.stiffness4.iter()).enumerate() {
             for dir in 0..2 {
                 let li = 2 * i + dir;
-                let mut sum = axial.get(li).copied().unwrap_or(T::zero())
-                    - weight.get(li).copied().unwrap_or(T::zero());
+                // (M ä + K (u + c u̇)) + Q_l − Q_f, summed in this order: the inertia and
+                // bending terms first, so that in f32 the large canceling bending forces are
+                // summed among themselves before the axial force joins.
+                let (mut inertia, mut elastic) = (T::zero(), T::zero());
                 for (j, (m, kk)) in mrow.iter().zip(krow.iter()).enumerate() {
                     let lj = 2 * j + dir;
                     if let (Some(uj), Some(vj), Some(aj)) = (u.get(lj), v.get(lj), a.get(lj)) {
-                        sum += *m * *aj + *kk * (*uj + c * *vj);
+                        inertia += *m * *aj;
+                        elastic += *kk * (*uj + *vj * c);
                     }
                 }
+                let sum = (inertia + elastic) + axial.get(li).copied().unwrap_or(T::zero())
+                    - weight.get(li).copied().unwrap_or(T::zero());
                 if let Some(dst) = global_index(k, li).and_then(|g| r.get_mut(g)) {
                     *dst += sum;
                 }
@@ -138,7 +136,8 @@ impl<T: Real> Beam<T> {
     }
 
     /// Adds the beam's residual into `r` and its Newton matrix along the chain `ch` into `jac`:
-    /// per element `(c_m M₄ + (c_q + c_v c) K₄) ⊗ I₂ + c_q K_l`.
+    /// per element `(c_m M₄ + (c_q + c_v c) K₄) ⊗ I₂ + c_q K_l`, built as one 8×8 block and
+    /// added to the band row by row.
     pub fn residual_and_jacobian<const D: usize>(
         &self,
         n: usize,
@@ -146,40 +145,32 @@ impl<T: Real> Beam<T> {
         g_eff: T,
         ch: &Chain<T>,
         r: &mut SVector<T, D>,
-        jac: &mut SMatrix<T, D, D>,
+        jac: &mut BandMatrix<T, D>,
     ) {
         let weight = self.element.gravity_force(g_eff);
         let c_k = ch.c_q + ch.c_v * self.damping;
-        let mut linear = [[T::zero(); 4]; 4];
-        for ((lr, mr), kr) in linear
-            .iter_mut()
-            .zip(self.mass4.iter())
-            .zip(self.stiffness4.iter())
-        {
-            for ((l, m), kk) in lr.iter_mut().zip(mr.iter()).zip(kr.iter()) {
-                *l = ch.c_m * *m + c_k * *kk;
-            }
-        }
-        let data = jac.as_mut_slice();
-        for k in 0..n {
-            let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
-            // The clamped root node's rows and columns are not unknowns: offset −4.
-            let axial = self.quadrature.tangent(&u, |li, lj, value| {
-                if let (Some(gi), Some(gj)) = (global_index(k, li), global_index(k, lj)) {
-                    add_at(data, D, gi, gj, ch.c_q * value);
-                }
-            });
-            for (i, row) in linear.iter().enumerate() {
-                for (j, value) in row.iter().enumerate() {
-                    for dir in 0..2 {
-                        if let (Some(gi), Some(gj)) =
-                            (global_index(k, 2 * i + dir), global_index(k, 2 * j + dir))
-                        {
-                            add_at(data, D, gi, gj, *value);
-                        }
+        // The linear part, the same for every element: (c_m M₄ + c_k K₄) ⊗ I₂.
+        let mut linear = [[T::zero(); 8]; 8];
+        for (i, (mr, kr)) in self.mass4.iter().zip(self.stiffness4.iter()).enumerate() {
+            for (j, (m, kk)) in mr.iter().zip(kr.iter()).enumerate() {
+                let value = ch.c_m * *m + c_k * *kk;
+                for dir in 0..2 {
+                    if let Some(x) = linear
+                        .get_mut(2 * i + dir)
+                        .and_then(|row| row.get_mut(2 * j + dir))
+                    {
+                        *x = value;
                     }
                 }
             }
+        }
+        for k in 0..n {
+            let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
+            let mut block = linear;
+            let axial = self.quadrature.add_tangent(&u, ch.c_q, &mut block);
+            // Element k's local row 0 is global row 4k − 4; the root node (k = 0) is clamped.
+            let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
+            jac.add_block8(first, skip, &block);
             self.add_element_residual(k, &u, (&ue, &ae), &axial, &weight, r);
         }
     }

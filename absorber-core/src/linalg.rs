@@ -12,12 +12,13 @@
 //! velocity terms enter scaled by `βh²` and `γh`. Elimination without pivoting is stable for it
 //! as for any matrix close to an SPD one. It is not *assumed*: every pivot is checked against
 //! the largest entry of its column below it ([`PIVOT_RATIO`]); if one is smaller, or not
-//! finite, [`factor_banded`] gives up and the caller factors a fresh copy with
+//! finite, [`BandMatrix::factor`] gives up and the caller factors a fresh copy with
 //! [`factor_pivoted`] (partial pivoting, full matrix). `docs/stability.md` records how often the
 //! fallback ran over the stiff, extreme and `f32` cases (never, so far).
 //!
-//! Matrices are column-major `SMatrix` (nalgebra's layout), factored in place; the inner loops
-//! run down contiguous columns through iterators, so no index can panic.
+//! The band is stored by rows ([`BandMatrix`]) and factored in place; the dense fallback uses
+//! nalgebra's column-major `SMatrix`. Inner loops run over fixed windows through iterators, so
+//! no index can panic.
 
 use crate::scalar::{is_positive, Real};
 use nalgebra::{SMatrix, SVector};
@@ -30,6 +31,202 @@ pub const BAND: usize = 7;
 /// pivoting uses 0.1 for sparse LU; 1e-3 still bounds the growth per step by 1000.
 pub const PIVOT_RATIO: f64 = 1e-3;
 
+/// Entries kept per row of a [`BandMatrix`]: columns `i − BAND ..= i + BAND`.
+pub const WIDTH: usize = 2 * BAND + 1;
+
+/// A `D×D` matrix with `J[i,j] = 0` for `|i − j| > BAND`, stored by rows of the band:
+/// `rows[i][j − i + BAND] = J[i,j]` (entries outside the matrix stay zero). Every operation
+/// works on fixed 7- and 8-wide windows of a row, which the compiler unrolls: no loop
+/// overhead and no index check inside the elimination.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BandMatrix<T, const D: usize> {
+    rows: [[T; WIDTH]; D],
+}
+
+impl<T: Real, const D: usize> BandMatrix<T, D> {
+    /// All zeros.
+    pub fn zeros() -> Self {
+        Self {
+            rows: [[T::zero(); WIDTH]; D],
+        }
+    }
+
+    /// Sets every entry to zero.
+    pub fn clear(&mut self) {
+        for r in self.rows.iter_mut() {
+            *r = [T::zero(); WIDTH];
+        }
+    }
+
+    /// Adds `v` at `(i, j)`; entries outside the band or the matrix are ignored.
+    #[inline]
+    pub fn add(&mut self, i: usize, j: usize, v: T) {
+        if let Some(x) = self
+            .rows
+            .get_mut(i)
+            .and_then(|r| r.get_mut((j + BAND).wrapping_sub(i)))
+        {
+            *x += v;
+        }
+    }
+
+    /// `J[i,j]` (zero outside the band).
+    pub fn get(&self, i: usize, j: usize) -> T {
+        self.rows
+            .get(i)
+            .and_then(|r| r.get((j + BAND).wrapping_sub(i)))
+            .copied()
+            .unwrap_or(T::zero())
+    }
+
+    /// Adds an 8×8 block whose local row/column `a` is global `first + a`, skipping the local
+    /// rows and columns below `skip` (the clamped root node: `first` is then negative, given
+    /// as `first + skip ≥ 0` with `skip`).
+    #[inline]
+    pub fn add_block8(&mut self, first: usize, skip: usize, block: &[[T; 8]; 8]) {
+        // Row first+a, columns first+b: band index b − a + BAND.
+        for (a, brow) in block.iter().enumerate().skip(skip) {
+            let Some(row) = (first + a)
+                .checked_sub(skip)
+                .and_then(|i| self.rows.get_mut(i))
+            else {
+                continue;
+            };
+            let lo = BAND - a;
+            if let (Some(dst), Some(src)) = (row.get_mut(lo + skip..lo + 8), brow.get(skip..)) {
+                for (d, s) in dst.iter_mut().zip(src.iter()) {
+                    *d += *s;
+                }
+            }
+        }
+    }
+
+    /// The same matrix, dense (the pivoting fallback; modes and tests).
+    pub fn to_dense(&self) -> SMatrix<T, D, D> {
+        let mut m = SMatrix::<T, D, D>::zeros();
+        for (i, row) in self.rows.iter().enumerate() {
+            for (k, v) in row.iter().enumerate() {
+                if let Some(x) = (i + k).checked_sub(BAND).and_then(|j| m.get_mut((i, j))) {
+                    *x = *v;
+                }
+            }
+        }
+        m
+    }
+
+    /// Factors in place, `J = L U` without row exchanges (unit lower `L` below the diagonal,
+    /// `U` on and above). `false` if a pivot is not finite or smaller than `ratio` times the
+    /// largest entry below it in its column (the matrix is then destroyed).
+    pub fn factor(&mut self, ratio: T) -> bool {
+        for k in 0..D {
+            let Some((head, tail)) = self.rows.split_at_mut_checked(k + 1) else {
+                return false;
+            };
+            let Some(pivot_row) = head.last() else {
+                return false;
+            };
+            let p = pivot_row[BAND];
+            // U[k, k+1 ..= k+BAND].
+            let Some(u) = pivot_row.last_chunk::<BAND>() else {
+                return false;
+            };
+            let mut largest = T::zero();
+            for (m, row) in tail.iter().take(BAND).enumerate() {
+                // A comparison, not `max`: `fmaxf` is a library call on the M4.
+                let v = row[BAND - 1 - m].abs();
+                if v > largest {
+                    largest = v;
+                }
+            }
+            if !p.is_finite() || !is_positive(p.abs()) || p.abs() < ratio * largest {
+                return false;
+            }
+            let inv = T::one() / p;
+            // Row k+1+m: its column k sits at BAND − 1 − m, columns k+1 … k+BAND follow.
+            for (m, row) in tail.iter_mut().take(BAND).enumerate() {
+                let c = BAND - 1 - m;
+                let l = row[c] * inv;
+                row[c] = l;
+                if l == T::zero() {
+                    continue;
+                }
+                if let Some(dst) = row.get_mut(c + 1..c + 1 + BAND) {
+                    for (d, s) in dst.iter_mut().zip(u.iter()) {
+                        *d -= l * *s;
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// Solves `J x = b` in place from [`BandMatrix::factor`]'s factors; `false` if the result
+    /// is not finite.
+    pub fn solve(&self, b: &mut SVector<T, D>) -> bool {
+        let x = b.as_mut_slice();
+        // Forward: x_i −= Σ_m L[i, i−m] x_{i−m} (a full 7-wide window from row BAND on).
+        for (i, row) in self.rows.iter().enumerate() {
+            let start = i.saturating_sub(BAND);
+            let s = match (row.first_chunk::<BAND>(), window::<T, BAND>(x, start)) {
+                (Some(l), Some(prev)) if i >= BAND => dot(l, prev),
+                _ => {
+                    let mut s = T::zero();
+                    if let (Some(l), Some(prev)) =
+                        (row.get(BAND - (i - start)..BAND), x.get(start..i))
+                    {
+                        for (a, b) in l.iter().zip(prev.iter()) {
+                            s += *a * *b;
+                        }
+                    }
+                    s
+                }
+            };
+            if let Some(xi) = x.get_mut(i) {
+                *xi -= s;
+            }
+        }
+        // Backward: x_i = (x_i − Σ_m U[i, i+m] x_{i+m}) / U[i, i].
+        for (i, row) in self.rows.iter().enumerate().rev() {
+            let end = (i + 1 + BAND).min(D);
+            let s = match (row.last_chunk::<BAND>(), window::<T, BAND>(x, i + 1)) {
+                (Some(u), Some(next)) => dot(u, next),
+                _ => {
+                    let mut s = T::zero();
+                    if let (Some(u), Some(next)) = (
+                        row.get(BAND + 1..BAND + 1 + (end - i - 1)),
+                        x.get(i + 1..end),
+                    ) {
+                        for (a, b) in u.iter().zip(next.iter()) {
+                            s += *a * *b;
+                        }
+                    }
+                    s
+                }
+            };
+            if let Some(xi) = x.get_mut(i) {
+                *xi = (*xi - s) / row[BAND];
+            }
+        }
+        x.iter().all(|v| v.is_finite())
+    }
+}
+
+/// `x[start .. start + W]` as a fixed window, if it lies inside `x`.
+#[inline(always)]
+fn window<T, const W: usize>(x: &[T], start: usize) -> Option<&[T; W]> {
+    x.get(start..).and_then(|s| s.first_chunk::<W>())
+}
+
+/// `Σ a_k b_k` over fixed windows (unrolled), summed in index order.
+#[inline(always)]
+fn dot<T: Real, const W: usize>(a: &[T; W], b: &[T; W]) -> T {
+    let mut s = T::zero();
+    for (x, y) in a.iter().zip(b.iter()) {
+        s += *x * *y;
+    }
+    s
+}
+
 /// How a factored matrix was factored (what [`solve`] must undo).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pivoting<const D: usize> {
@@ -37,50 +234,6 @@ pub enum Pivoting<const D: usize> {
     None,
     /// Dense, partial pivoting: `pivots[k]` is the row swapped with row `k` at step `k`.
     Rows([usize; D]),
-}
-
-/// Factors `a` in place, `a = L U` (unit lower `L` below the diagonal, `U` on and above), using
-/// only the band. `false` if a pivot is not finite or smaller than [`PIVOT_RATIO`] times the
-/// largest entry below it (then `a` is destroyed: rebuild it and use [`factor_pivoted`]).
-pub fn factor_banded<T: Real, const D: usize>(a: &mut SMatrix<T, D, D>, ratio: T) -> bool {
-    let data = a.as_mut_slice();
-    for k in 0..D {
-        let end = (k + BAND + 1).min(D);
-        let (left, right) = data.split_at_mut((k + 1) * D);
-        let Some(col_k) = left.get_mut(k * D..(k + 1) * D) else {
-            return false;
-        };
-        let Some((pivot, below)) = col_k.get_mut(k..end).and_then(|c| c.split_first_mut()) else {
-            return false;
-        };
-        let p = *pivot;
-        let mut largest = T::zero();
-        for l in below.iter() {
-            largest = largest.max(l.abs());
-        }
-        if !p.is_finite() || !is_positive(p.abs()) || p.abs() < ratio * largest {
-            return false;
-        }
-        let inv = T::one() / p;
-        for l in below.iter_mut() {
-            *l *= inv;
-        }
-        // Columns k+1 .. end: col_j[k+1..end] -= l · U[k, j].
-        for col_j in right.chunks_exact_mut(D).take(end - k - 1) {
-            let Some(ukj) = col_j.get(k).copied() else {
-                return false;
-            };
-            if ukj == T::zero() {
-                continue;
-            }
-            if let Some(dst) = col_j.get_mut(k + 1..end) {
-                for (d, l) in dst.iter_mut().zip(below.iter()) {
-                    *d -= *l * ukj;
-                }
-            }
-        }
-    }
-    true
 }
 
 /// Factors `a` in place with partial pivoting over the full matrix, `P a = L U`; `None` if it
@@ -132,8 +285,9 @@ pub fn factor_pivoted<T: Real, const D: usize>(a: &mut SMatrix<T, D, D>) -> Opti
     Some(pivots)
 }
 
-/// Solves `A x = b` in place (`b` becomes `x`) from the factors of [`factor_banded`] or
-/// [`factor_pivoted`]; `false` if the result is not finite.
+/// Solves `A x = b` in place (`b` becomes `x`) from dense factors ([`factor_pivoted`], or
+/// unpivoted dense factors restricted to the band with [`Pivoting::None`]); `false` if the
+/// result is not finite.
 pub fn solve<T: Real, const D: usize>(
     lu: &SMatrix<T, D, D>,
     pivoting: &Pivoting<D>,
@@ -211,12 +365,18 @@ mod tests {
         )
         .is_none());
         // The banded elimination refuses the zero pivot.
-        let mut b = a;
-        assert!(!factor_banded(&mut b, PIVOT_RATIO));
+        let mut b = BandMatrix::<f64, 3>::zeros();
+        for i in 0..3 {
+            for j in 0..3 {
+                b.add(i, j, a[(i, j)]);
+            }
+        }
+        assert!(!b.factor(PIVOT_RATIO));
     }
 
     /// A banded, diagonally dominant 20×20 matrix (half-bandwidth 7, non-symmetric): the banded
-    /// factors solve it as the pivoted dense LU does, to rounding.
+    /// factors (dense storage and band storage) solve it as the pivoted dense LU does, to
+    /// rounding.
     #[test]
     fn banded_factors_equal_dense_ones_on_a_band_matrix() {
         let mut a = SMatrix::<f64, 20, 20>::zeros();
@@ -229,12 +389,18 @@ mod tests {
             a[(i, i)] += 12.0;
         }
         let x = SVector::<f64, 20>::from_fn(|i, _| (i as f64 * 0.9).cos());
-        let mut f = a;
-        assert!(factor_banded(&mut f, PIVOT_RATIO));
-        let mut b = a * x;
-        assert!(solve(&f, &Pivoting::None, &mut b));
-        assert!((b - x).amax() < 1e-13, "{}", (b - x).amax());
         let dense = solve_dense(a, a * x).expect("regular");
-        assert!((dense - b).amax() < 1e-13);
+        assert!((dense - x).amax() < 1e-13);
+        let mut band = BandMatrix::<f64, 20>::zeros();
+        for i in 0..20 {
+            for j in 0..20 {
+                band.add(i, j, a[(i, j)]);
+            }
+        }
+        assert_eq!(band.to_dense(), a);
+        assert!(band.factor(PIVOT_RATIO));
+        let mut c = a * x;
+        assert!(band.solve(&mut c));
+        assert!((c - x).amax() < 1e-13, "{}", (c - x).amax());
     }
 }

@@ -350,7 +350,12 @@ mod tests {
             c_v: 0.7 * 3e-3,
             c_m: 1.0,
         };
-        let (_, jac, _) = m.assemble(&q, &v, &a, 9.0, &ch, contact, false);
+        let (r0, jac, f0) = m.assemble(&q, &v, &a, 9.0, &ch, contact, false);
+        // The residual alone (reused-matrix iterations) is the same residual.
+        let mut r1 = SVector::<f64, D>::zeros();
+        let f1 = m.sys.residual([&q, &v, &a], 9.0, contact, false, &mut r1);
+        assert!((r1 - r0).amax() <= 1e-12 * r0.amax(), "{r0} vs {r1}");
+        assert!((f1 - f0).abs() <= 1e-12 * f0.abs().max(1.0));
         for j in 0..D {
             let h = 1e-3;
             let mut e = SVector::<f64, D>::zeros();
@@ -449,5 +454,7 @@ mod tests {
         check_jacobian::<FreeBall, 2, 9>(Contact::Off);
         check_jacobian::<FreeBall, 2, 9>(Contact::OnStop(Side::Positive));
         check_jacobian::<LockedBall, 2, 8>(Contact::Off);
+        check_jacobian::<FreeBall, 3, 13>(Contact::Off);
+        check_jacobian::<FreeBall, 5, 21>(Contact::Off);
     }
 }

@@ -21,7 +21,7 @@
 //! had never been offered.
 
 use crate::error::Error;
-use crate::linalg::{self, Pivoting};
+use crate::linalg::{self, BandMatrix, Pivoting};
 use crate::model::Contact;
 use crate::params::NewtonKind;
 use crate::scalar::{is_positive, lit, to_f64, Real};
@@ -41,7 +41,11 @@ pub const DAMPING_TRIALS: u32 = 12;
 
 /// A reused matrix's iteration is converged when its estimated remaining error
 /// `θ/(1−θ)‖dx‖` is below `SETTLE · tolerance` (and `‖dx‖` below the tolerance).
-pub const SETTLE: f64 = 0.01;
+pub const SETTLE: f64 = 1e-4;
+
+/// A reused matrix whose correction contracted by less than this factor is refreshed at the
+/// next iteration (the correction itself is taken when it contracts by half).
+pub const SLOW: f64 = 0.25;
 
 /// What a factored matrix was built for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,11 +54,14 @@ struct Key<T> {
     contact: Contact,
 }
 
-/// One factored Newton matrix.
+/// One factored Newton matrix: banded (the rule), or dense with row exchanges (the fallback
+/// when a band pivot is too small).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Factors<T, const D: usize> {
-    lu: SMatrix<T, D, D>,
-    pivoting: Pivoting<D>,
+    band: BandMatrix<T, D>,
+    dense: SMatrix<T, D, D>,
+    /// `None`: the band holds the factors; `Some`: the dense matrix, with these row exchanges.
+    pivots: Option<[usize; D]>,
     key: Option<Key<T>>,
 }
 
@@ -69,13 +76,18 @@ pub struct Workspace<T, const D: usize> {
     current: Option<usize>,
     /// Factors were built during this step (they go to slot `1 − kept`).
     built: bool,
+    /// Off the step path (static solve, start of a run): factor dense with partial pivoting.
+    /// The static stiffness has no mass to lean on, and pivoting keeps its rounding floor
+    /// where `f32` needs it (N = 16, very short beams).
+    pivot: bool,
 }
 
 impl<T: Real, const D: usize> Default for Workspace<T, D> {
     fn default() -> Self {
         let empty = Factors {
-            lu: SMatrix::zeros(),
-            pivoting: Pivoting::None,
+            band: BandMatrix::zeros(),
+            dense: SMatrix::zeros(),
+            pivots: None,
             key: None,
         };
         Self {
@@ -83,6 +95,7 @@ impl<T: Real, const D: usize> Default for Workspace<T, D> {
             kept: 0,
             current: None,
             built: false,
+            pivot: false,
         }
     }
 }
@@ -100,6 +113,7 @@ impl<T: Real, const D: usize> Workspace<T, D> {
     /// Starts a step: modified Newton may reuse the kept factors, the others start afresh.
     pub(crate) fn begin_step(&mut self, kind: NewtonKind) {
         self.built = false;
+        self.pivot = false;
         self.current = match kind {
             NewtonKind::Modified => Some(self.kept),
             NewtonKind::PerStep | NewtonKind::Full => None,
@@ -110,6 +124,7 @@ impl<T: Real, const D: usize> Workspace<T, D> {
     pub(crate) fn begin_solve(&mut self) {
         self.built = false;
         self.current = None;
+        self.pivot = true;
     }
 
     /// The step succeeded: modified Newton keeps the newest factors.
@@ -129,13 +144,11 @@ impl<T: Real, const D: usize> Workspace<T, D> {
         let Some(slot) = self.current.and_then(|i| self.slots.get(i)) else {
             return false;
         };
-        match slot.key {
-            // Built in this step: any Newmark coefficients (the guard checks the fit).
-            Some(k) if self.built => k.contact == p.contact,
-            // Kept from earlier steps: the same step length and contact only.
-            Some(k) => k.contact == p.contact && k.c_q == p.ch.c_q,
-            None => false,
-        }
+        // Only for the same Newmark coefficient and contact: a matrix built for another
+        // chain (a sub-step, an acceleration solve) can be far off in the stiff modes, and the
+        // first correction of a solve has no previous one to be checked against.
+        slot.key
+            .is_some_and(|k| k.contact == p.contact && k.c_q == p.ch.c_q)
     }
 
     /// Solves `J dx = b` in place with the latest factors.
@@ -144,19 +157,23 @@ impl<T: Real, const D: usize> Workspace<T, D> {
             .current
             .and_then(|i| self.slots.get(i))
             .ok_or(Error::Singular)?;
-        if f.key.is_some() && linalg::solve(&f.lu, &f.pivoting, b) {
+        let ok = match &f.pivots {
+            None => f.band.solve(b),
+            Some(p) => linalg::solve(&f.dense, &Pivoting::Rows(*p), b),
+        };
+        if f.key.is_some() && ok {
             Ok(())
         } else {
             Err(Error::Singular)
         }
     }
 
-    /// Whether factors exist for the contact state `contact` (built in this step).
-    pub(crate) fn has_step_factors(&self, contact: Contact) -> bool {
+    /// Whether the current factors were built for Newmark coefficient `c_q` and `contact`.
+    pub(crate) fn has_factors(&self, c_q: T, contact: Contact) -> bool {
         self.current
             .and_then(|i| self.slots.get(i))
             .and_then(|f| f.key)
-            .is_some_and(|k| k.contact == contact)
+            .is_some_and(|k| k.contact == contact && k.c_q == c_q)
     }
 }
 
@@ -190,28 +207,46 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             p.contact,
             p.plumb,
             r,
-            &mut slot.lu,
+            &mut slot.band,
         );
-        slot.pivoting = if linalg::factor_banded(&mut slot.lu, self.pivot_ratio) {
-            Pivoting::None
+        slot.pivots = if !ws.pivot && slot.band.factor(self.pivot_ratio) {
+            None
         } else {
-            // Rare: rebuild the matrix (the banded elimination destroyed it) and pivot.
-            self.residual_and_jacobian(
-                [q, v, a],
-                p.g_eff,
-                &p.ch,
-                p.contact,
-                p.plumb,
-                r,
-                &mut slot.lu,
-            );
-            Pivoting::Rows(linalg::factor_pivoted(&mut slot.lu).ok_or(Error::Singular)?)
+            self.pivot_fallback(p, qva, r, slot)?
         };
         slot.key = Some(Key {
             c_q: p.ch.c_q,
             contact: p.contact,
         });
         Ok(())
+    }
+
+    /// Rare: a band pivot was too small. Rebuild the matrix (the elimination destroyed it) and
+    /// factor it dense with partial pivoting. Not inlined: it keeps the dense matrix's code
+    /// and frame off the ordinary path.
+    #[inline(never)]
+    #[cold]
+    fn pivot_fallback(
+        &self,
+        p: &Problem<'_, T, D>,
+        qva: &[SVector<T, D>; 3],
+        r: &mut SVector<T, D>,
+        slot: &mut Factors<T, D>,
+    ) -> Result<Option<[usize; D]>, Error> {
+        let [q, v, a] = qva;
+        self.residual_and_jacobian(
+            [q, v, a],
+            p.g_eff,
+            &p.ch,
+            p.contact,
+            p.plumb,
+            r,
+            &mut slot.band,
+        );
+        slot.dense = slot.band.to_dense();
+        linalg::factor_pivoted(&mut slot.dense)
+            .map(Some)
+            .ok_or(Error::Singular)
     }
 
     /// Newton on `x` (from the guess `x`) for problem `p`. Convergence:
@@ -255,7 +290,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 refresh = true;
                 continue;
             }
-            refresh = false;
+            // Taken; but a matrix that contracts slowly (θ > SLOW) would cost more iterations
+            // than a fresh one, which converges quadratically: refresh at the next iteration.
+            refresh = reuse && it > 1 && norm > previous * self.slow;
             let lambda = if norm > self.max_step {
                 self.damping(p, &x, &dx, norm, ws)
             } else {

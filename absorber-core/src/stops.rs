@@ -6,13 +6,13 @@
 //!    through both step ends with their rates ([`System::crossing_fraction`]);
 //! 2. a Newmark sub-step of length τh reaches the crossing;
 //! 3. the impact ([`System::impact`]) projects the ball onto the stop and applies the impulse
-//!    with the step's factored Newton matrix `W = M + γhC + βh²K` (no new factorization);
+//!    with the Newmark matrix `W = M + γhC + βh²K` at the crossing;
 //! 4. the consistent acceleration after the impulse and the Newmark rest of the step,
 //!    `(1 − τ)h`, follow.
 //!
-//! Every solve of the split step starts from the step's factors and refreshes them only when
-//! they stop contracting ([`crate::newton`]): an impact step costs about three ordinary steps
-//! of residuals but one or two factorizations (docs/embedded.md measures it).
+//! Each of these solves has its own Newton matrix (another step length, or the mass matrix
+//! alone), reused within it ([`crate::newton`]): an impact step factors about five times where
+//! an ordinary step factors once (docs/embedded.md measures the worst step).
 //!
 //! A ball resting on a stop is held there (`φ = ψ − (ρ/r_b) α_stop`) until the stop would have
 //! to pull it.
@@ -232,9 +232,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// there (over-step model), else a fresh one (or the mass matrix) at the impact state.
     fn impulse_matrix(&self, s: &State<T, D>, ws: &mut Workspace<T, D>) -> Result<(), Error> {
         let over_step = self.params.ball.impact_model == ImpactModel::OverStep;
-        if over_step && ws.has_step_factors(Contact::Off) {
-            return Ok(());
-        }
         let ch = if over_step {
             self.newmark_chain(self.params.integrator.step)
         } else {
@@ -244,6 +241,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 c_m: T::one(),
             }
         };
+        if ws.has_factors(ch.c_q, Contact::Off) {
+            // The step's own W (an impact right at the step start reuses the trial's).
+            return Ok(());
+        }
         let zero = SVector::zeros();
         let p = Problem {
             q0: &s.q,

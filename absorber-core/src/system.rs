@@ -9,7 +9,7 @@
 use crate::beam::Beam;
 use crate::dual::Plain;
 use crate::error::Error;
-use crate::linalg::PIVOT_RATIO;
+use crate::linalg::{BandMatrix, PIVOT_RATIO};
 use crate::model::{Contact, State};
 use crate::newton::MAX_STEP;
 use crate::params::Params;
@@ -34,6 +34,8 @@ pub struct System<T, S, const N: usize, const D: usize> {
     pub(crate) max_step: T,
     /// [`crate::newton::SETTLE`] in the scalar.
     pub(crate) settle: T,
+    /// [`crate::newton::SLOW`] in the scalar.
+    pub(crate) slow: T,
     _scene: PhantomData<S>,
 }
 
@@ -106,6 +108,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             pivot_ratio: lit(PIVOT_RATIO),
             max_step: lit(MAX_STEP),
             settle: lit(crate::newton::SETTLE),
+            slow: lit(crate::newton::SLOW),
             _scene: PhantomData,
         }
     }
@@ -187,11 +190,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         contact: Contact,
         plumb: bool,
         r: &mut SVector<T, D>,
-        jac: &mut SMatrix<T, D, D>,
+        jac: &mut BandMatrix<T, D>,
     ) -> T {
         let [q, v, a] = qva;
         r.fill(T::zero());
-        jac.fill(T::zero());
+        jac.clear();
         self.beam
             .residual_and_jacobian(N, (q, v, a), g_eff, ch, r, jac);
         if !S::HAS_TIP {
@@ -202,15 +205,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let (rows, force) =
             tip::residual::<T, D5<T>>(&self.inertia, &x, ch, g_eff, mode, S::EXTRA_DOFS == 1);
         let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
-        let data = jac.as_mut_slice();
         for (i, row) in rows.iter().enumerate().take(n) {
             if let Some(dst) = r.get_mut(Self::END + i) {
                 *dst += row.re;
             }
             for (j, d) in row.du.iter().enumerate().take(n) {
-                if let Some(dst) = data.get_mut((Self::END + j) * D + Self::END + i) {
-                    *dst += *d;
-                }
+                jac.add(Self::END + i, Self::END + j, *d);
             }
         }
         force
@@ -229,9 +229,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         plumb: bool,
     ) -> (SVector<T, D>, SMatrix<T, D, D>, T) {
         let mut r = SVector::zeros();
-        let mut jac = SMatrix::zeros();
+        let mut jac = BandMatrix::zeros();
         let f = self.residual_and_jacobian([q, v, a], g_eff, ch, contact, plumb, &mut r, &mut jac);
-        (r, jac, f)
+        (r, jac.to_dense(), f)
     }
 
     /// Effective gravity `g + ÿ_b` \[m/s²\] (the frame translating with the base).

@@ -21,7 +21,7 @@
 //! `q̇_i = ṽ + γh x`): (1) the dependent positions from `C = 0` by Newton–Raphson (to rounding);
 //! (2) the dependent velocities from `C_q q̇ = 0`; (3) the accelerations and multipliers from the
 //! augmented system (eq. 22) `[M C_qᵀ; C_q 0] [q̈; λ] = [Q_e − Q_k; Q_d]`, `Q_d = −(C_q q̇)_q q̇`
-//! (eq. 23), solved by a banded LU; (4) the residual of the independent accelerations,
+//! (eq. 23), solved by a Schur complement on the constant mass matrix (below); (4) the residual of the independent accelerations,
 //! `δ = x − q̈_i`, weighted by the reduced mass, `r = Bᵀ M B δ` (B = ∂q/∂q_i, the velocity
 //! transformation), which is the virtual work of the unbalanced forces along the independent
 //! directions; (5) the Newton matrix `∂r/∂x`: the beam part from the element tangents (exact),
@@ -29,19 +29,33 @@
 //! residual, which includes the inertia, geometric and `λ·C_qq` terms. Convergence: the core's
 //! criterion, `max |c_pos Δx_i| / scale_i ≤ tolerance`.
 //!
-//! Stops, stick and release, impulses: the core's algorithm (`absorber_core::model`), with the
-//! relative angle `α = θ − ψ` and its gradient computed from the maximal coordinates.
+//! **Linear algebra** (see docs/full-solver.md). The mass matrix `M` is constant and the clamp
+//! fixes the root node, so the augmented system (22) is solved through the free-coordinate mass
+//! matrix `M_f`, factored once per solver by a kept sparse LU ([`sparse`], faer), and the `m ≤ 6`
+//! local constraint rows `G = C_q` (nonzero only on the 10 local coordinates):
+//! `q̈ = M_f⁻¹ f − M_f⁻¹ Gᵀ λ`, `(G M_f⁻¹ Gᵀ) λ = G M_f⁻¹ f + (C_q q̇)_q q̇` (the Schur
+//! complement, `m × m`, from the constant 10 × 10 block of `M_f⁻¹` on the local coordinates). The
+//! reduced Newton matrix (banded, bordered by the ball spin) is factored by the same sparse LU,
+//! symbolic analysis once per partition. **Newton rule**: one Jacobian and factorization per
+//! solve; a reused factorization must halve the scaled correction of the previous iteration, else
+//! the correction is discarded and the matrix is rebuilt at the same iterate (the core's rule).
+//!
+//! Stops, stick and release, impulses: the core's algorithm (`absorber_core::stops`), with the
+//! relative angle `α = θ − ψ` and its gradient computed from the maximal coordinates. Newton:
+//! the core's rule (`absorber_core::newton`) for step solves — one matrix per solve, reused while
+//! it contracts — and a fresh matrix every iteration for static and acceleration solves.
 
-mod band;
 pub mod kin;
+mod sparse;
 
 use crate::sim::{Observation, Simulator};
 use absorber_core::ancf::{Element, ElementMatrix, ElementVector};
 use absorber_core::tip::Chain;
 use absorber_core::{Contact, Energies, Error, Impact, ImpactModel, Params, Side, StepReport};
-use band::Band;
 use kin::{Bodies, Cons, Mode, MC, NW, PHI, PSI, RB1, RB2, RT1, RT2};
-use nalgebra::{DMatrix, SMatrix, SVector};
+use nalgebra::{Const, DMatrix, SMatrix, SVector, LU};
+use sparse::{Lu, Order, Pattern};
+use std::sync::{Arc, Mutex, MutexGuard};
 
 /// Which bodies the full solver models.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,29 +116,53 @@ struct Solved {
 }
 
 /// Local kinematics at one configuration: positions and velocities of the 10 local
-/// coordinates, the constraints, and `B_d = ∂w_d/∂w_i`.
-#[derive(Clone, Copy)]
+/// coordinates, the constraints, `B_d = ∂w_d/∂w_i`, and the LU of `C_d = ∂C/∂w_d` at the
+/// configuration, shared by the velocity projection, `B_d` and the acceleration constraints.
+#[derive(Clone)]
 struct Kin {
     w: [f64; NW],
     wd: [f64; NW],
     cons: Cons,
-    lu_dep: SMatrix<f64, MC, MC>,
+    lu_dep: LU<f64, Const<MC>, Const<MC>>,
     bd: [[f64; 5]; MC],
 }
 
 struct Evaluated {
     r: Vec<f64>,
-    jac: Option<Band>,
     kin: Kin,
     lambda_local: [f64; MC],
 }
 
+/// The constant part of the augmented system (22): the LU of the free-coordinate mass matrix
+/// `M_f` (beam nodes 1..N, then the bodies; index `z − 4`), `M_f⁻¹ e_j` for the local
+/// coordinates j present, and their 10 × 10 block `P = E_locᵀ M_f⁻¹ E_loc`.
+#[derive(Clone, Debug)]
+struct MassFactor {
+    lu: Lu,
+    /// `M_f⁻¹ e_{zloc(j) − 4}`, column `j` at `j·n_f`, zero for absent local coordinates.
+    cols: Vec<f64>,
+    p_loc: [[f64; NW]; NW],
+    /// Scratch of length `n_f` (the force, then the accelerations).
+    f: Vec<f64>,
+}
+
+/// Factorizations kept between solves (behind a mutex: the solver's methods take `&self`).
+#[derive(Clone, Debug)]
+struct Work {
+    mass: MassFactor,
+    /// Reduced Newton matrix, one per partition: `[4N unknowns, 4N + 1 (free ball)]`.
+    reduced: [Option<Lu>; 2],
+}
+
 use absorber_core::model::{DAMPING_TRIALS, END_BEYOND_STOP, MAX_STEP, START_BEYOND_STOP};
-/// Half-bandwidth of the reduced Newton matrix.
-const RED_BW: usize = 7;
+use absorber_core::newton::SETTLE;
+use absorber_core::NewtonKind;
+
+/// Column order of the sparse factorizations (docs/full-solver.md compares the two).
+const ORDER: Order = Order::Natural;
 
 /// The full solver (see the module documentation).
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct FullSolver {
     params: Params<f64>,
     scene: SceneKind,
@@ -137,6 +175,33 @@ pub struct FullSolver {
     nz: usize,
     state: FullState,
     equilibrium: FullState,
+    work: Mutex<Work>,
+}
+
+impl Clone for FullSolver {
+    fn clone(&self) -> Self {
+        let work = lock(&self.work).clone();
+        Self {
+            params: self.params,
+            scene: self.scene,
+            n: self.n,
+            element: self.element,
+            me: self.me,
+            kb: self.kb,
+            bodies: self.bodies,
+            n_body: self.n_body,
+            nz: self.nz,
+            state: self.state.clone(),
+            equilibrium: self.equilibrium.clone(),
+            work: Mutex::new(work),
+        }
+    }
+}
+
+/// The kept factorizations (a poisoned lock still holds valid data: every use rebuilds what
+/// it factors).
+fn lock(w: &Mutex<Work>) -> MutexGuard<'_, Work> {
+    w.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 fn small_solve(a: &SMatrix<f64, MC, MC>, b: SVector<f64, MC>) -> Option<SVector<f64, MC>> {
@@ -233,19 +298,130 @@ impl FullSolver {
             contact: Contact::Off,
             theta_ref: 0.0,
         };
+        let me = element.mass_matrix();
+        let mass = Self::mass_factor(n, n_body, &me, &bodies)?;
         Ok(Self {
             params,
             scene,
             n,
             element,
-            me: element.mass_matrix(),
+            me,
             kb: element.bending_stiffness(),
             bodies,
             n_body,
             nz,
             equilibrium: state.clone(),
             state,
+            work: Mutex::new(Work {
+                mass,
+                reduced: [None, None],
+            }),
         })
+    }
+
+    /// Assembles and factors the free-coordinate mass matrix `M_f` (consistent beam mass of
+    /// nodes 1..N, `diag(m_t, m_t, J_t, J_b, m_b, m_b)`), and solves it for the unit vectors of
+    /// the local coordinates (end node, bodies).
+    fn mass_factor(
+        n: usize,
+        n_body: usize,
+        me: &ElementMatrix<f64>,
+        bodies: &Bodies,
+    ) -> Result<MassFactor, Error> {
+        let nf = 4 * n + n_body;
+        // Element e couples z = 4e..4e+8, i.e. free indices 4e−4..4e+4 (root node dropped).
+        let beam = (0..n).flat_map(|e| {
+            (0..64).filter_map(move |k| {
+                let (i, j) = (
+                    (4 * e + k / 8).checked_sub(4)?,
+                    (4 * e + k % 8).checked_sub(4)?,
+                );
+                Some((i, j))
+            })
+        });
+        let diag = (4 * n..nf).map(|i| (i, i));
+        let pattern = Pattern::new(nf, beam.chain(diag), ORDER).ok_or(Error::Singular)?;
+        let mut lu = Lu::new(Arc::new(pattern));
+        for e in 0..n {
+            for i in 0..8 {
+                for j in 0..8 {
+                    if let (Some(a), Some(b)) =
+                        ((4 * e + i).checked_sub(4), (4 * e + j).checked_sub(4))
+                    {
+                        lu.add(a, b, me[(i, j)]);
+                    }
+                }
+            }
+        }
+        for jb in 0..n_body {
+            lu.add(4 * n + jb, 4 * n + jb, bodies.mass[4 + jb]);
+        }
+        if !lu.factor() {
+            return Err(Error::Singular);
+        }
+        // Free index of local coordinate j (end node, then bodies), if present.
+        let floc = |j: usize| -> Option<usize> {
+            if j < 4 {
+                Some(4 * n - 4 + j)
+            } else if j - 4 < n_body {
+                Some(4 * n + j - 4)
+            } else {
+                None
+            }
+        };
+        let mut cols = vec![0.0; NW * nf];
+        for j in 0..NW {
+            if let Some(fj) = floc(j) {
+                let col = &mut cols[j * nf..(j + 1) * nf];
+                col[fj] = 1.0;
+                if !lu.solve(col) {
+                    return Err(Error::Singular);
+                }
+            }
+        }
+        let mut p_loc = [[0.0; NW]; NW];
+        for (i, row) in p_loc.iter_mut().enumerate() {
+            if let Some(fi) = floc(i) {
+                for (j, pij) in row.iter_mut().enumerate() {
+                    *pij = cols[j * nf + fi];
+                }
+            }
+        }
+        Ok(MassFactor {
+            lu,
+            cols,
+            p_loc,
+            f: vec![0.0; nf],
+        })
+    }
+
+    /// The reduced Newton matrix for `ni` independent unknowns (pattern and symbolic analysis
+    /// made on first use): element blocks of the free beam coordinates and the local block.
+    fn reduced_lu<'w>(
+        &self,
+        slots: &'w mut [Option<Lu>; 2],
+        ni: usize,
+    ) -> Result<&'w mut Lu, Error> {
+        let k = usize::from(ni != 4 * self.n);
+        let slot = slots.get_mut(k).ok_or(Error::Singular)?;
+        if slot.as_ref().map(Lu::n) != Some(ni) {
+            let n = self.n;
+            let loc0 = 4 * n - 4;
+            let beam = (0..n).flat_map(|e| {
+                (0..64).filter_map(move |k| {
+                    let (i, j) = (
+                        (4 * e + k / 8).checked_sub(4)?,
+                        (4 * e + k % 8).checked_sub(4)?,
+                    );
+                    Some((i, j))
+                })
+            });
+            let nl = ni - loc0;
+            let local = (0..nl * nl).map(|k| (loc0 + k / nl, loc0 + k % nl));
+            let pattern = Pattern::new(ni, beam.chain(local), ORDER).ok_or(Error::Singular)?;
+            *slot = Some(Lu::new(Arc::new(pattern)));
+        }
+        slot.as_mut().ok_or(Error::Singular)
     }
 
     /// The current state.
@@ -393,10 +569,10 @@ impl FullSolver {
             });
         }
         let c0 = self.bodies.constraints(&w, &zero, mode, theta_ref);
-        let lu_dep = build(&c0);
+        let lu_dep = build(&c0).lu();
         let mut bd = [[0.0; 5]; MC];
         if m > 0 {
-            let lu = lu_dep.lu();
+            let lu = &lu_dep;
             let mut rhs = SVector::<f64, MC>::zeros();
             for r in 0..m {
                 rhs[r] = -ind.iter().map(|&j| c0.grad[r][j] * wd[j]).sum::<f64>();
@@ -444,7 +620,11 @@ impl FullSolver {
                         .map(|&j| kin.cons.grad[r][j] * wdd[j])
                         .sum::<f64>();
             }
-            let x = small_solve(&kin.lu_dep, rhs).ok_or(Error::Singular)?;
+            let x = kin
+                .lu_dep
+                .solve(&rhs)
+                .filter(|x| x.iter().all(|v| v.is_finite()))
+                .ok_or(Error::Singular)?;
             for (r, &j) in dep.iter().enumerate() {
                 wdd[j] = x[r];
             }
@@ -482,11 +662,15 @@ impl FullSolver {
         Ok(r)
     }
 
-    /// Residual (and, with a chain, the Newton matrix) at independent positions, velocities and
-    /// accelerations. `warm` carries the dependent positions between calls.
+    /// Residual (and, with `jac`, the Newton matrix `∂r/∂x` for the chain, assembled into the
+    /// given matrix, not factored) at independent positions, velocities and accelerations.
+    /// `warm` carries the dependent positions between calls. The residual does not depend on
+    /// whether the matrix is assembled (bit for bit).
     #[allow(clippy::too_many_arguments)]
     fn evaluate(
         &self,
+        mass: &mut MassFactor,
+        jac: Option<(&mut Lu, &Chain<f64>)>,
         qi: &[f64],
         vi: &[f64],
         ai: &[f64],
@@ -494,7 +678,6 @@ impl FullSolver {
         mode: Mode,
         warm: &mut [f64; NW],
         theta_ref: f64,
-        ch: Option<&Chain<f64>>,
     ) -> Result<Evaluated, Error> {
         let n = self.n;
         let nz = self.nz;
@@ -503,13 +686,18 @@ impl FullSolver {
         let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], warm, theta_ref)?;
         *warm = kin.w;
         let m = mode.m();
-        let bw = RED_BW.max(4 + self.n_body + m);
-        let na = 4 + nz + m;
-        let mut aug = Band::zeros(na, bw, bw);
-        let mut rhs = vec![0.0; na];
-        let mut jac = ch.map(|_| Band::zeros(ni, RED_BW, RED_BW));
-        let zpos = |j: usize| 4 + j;
-        // Beam: mass, elastic and weight, element by element (node 0 included).
+        let mut jac = jac;
+        if let Some((jb, _)) = jac.as_mut() {
+            if jb.n() != ni {
+                return Err(Error::Singular);
+            }
+            jb.clear();
+        }
+        // Right-hand side of (22) on the free coordinates (index z − 4): element forces and
+        // weights; the root node's rows only feed the clamp multipliers, which are not needed.
+        let nf = nz - 4;
+        let f = &mut mass.f;
+        f.fill(0.0);
         let weight = self.element.gravity_force(g_eff);
         let damp = self.params.damping.stiffness_proportional;
         let zval = |i: usize, x: &[f64]| if i < 4 { 0.0 } else { x[i - 4] };
@@ -521,15 +709,13 @@ impl FullSolver {
                 ud[i] = zval(4 * e + i, vi);
             }
             let (ql, kl) = self.element.axial_force_and_tangent(&u);
-            let f = weight - self.kb * (u + ud * damp) - ql;
+            let fe = weight - self.kb * (u + ud * damp) - ql;
             for i in 0..8 {
-                let zi = 4 * e + i;
-                rhs[zpos(zi)] += f[i];
-                for j in 0..8 {
-                    aug.add(zpos(zi), zpos(4 * e + j), self.me[(i, j)]);
+                if let Some(fi) = (4 * e + i).checked_sub(4) {
+                    f[fi] += fe[i];
                 }
             }
-            if let (Some(jb), Some(c)) = (jac.as_mut(), ch) {
+            if let Some((jb, c)) = jac.as_mut() {
                 let je = self.me * c.c_m + self.kb * (c.c_q + c.c_v * damp) + kl * c.c_q;
                 for i in 0..8 {
                     let Some(gi) = (4 * e + i).checked_sub(4) else {
@@ -544,47 +730,54 @@ impl FullSolver {
                 }
             }
         }
-        // Bodies: constant diagonal mass, weights.
         let b0 = self.b0();
-        for jb in 0..self.n_body {
-            aug.add(zpos(b0 + jb), zpos(b0 + jb), self.bodies.mass[4 + jb]);
-        }
         let (mt, mb) = self.bodies.weights;
         if self.n_body >= 3 {
-            rhs[zpos(self.zloc(RT2))] -= mt * g_eff;
+            f[self.zloc(RT2) - 4] -= mt * g_eff;
         }
         if self.n_body >= 6 {
-            rhs[zpos(self.zloc(RB2))] -= mb * g_eff;
+            f[self.zloc(RB2) - 4] -= mb * g_eff;
         }
-        // Clamp: root node displacement = 0 (multipliers first).
-        for c in 0..4 {
-            aug.add(c, zpos(c), 1.0);
-            aug.add(zpos(c), c, 1.0);
-        }
-        // Fixed joint, rolling contact, lock.
-        for k in 0..m {
-            let row = 4 + nz + k;
-            for j in 0..NW {
-                let g = kin.cons.grad[k][j];
-                if g != 0.0 {
-                    let zj = zpos(self.zloc(j));
-                    aug.add(row, zj, g);
-                    aug.add(zj, row, g);
-                }
-            }
-            rhs[row] = -kin.cons.quad[k];
-        }
-        let lu = aug.factor().ok_or(Error::Singular)?;
-        if !lu.solve(&mut rhs) {
+        // u = M_f⁻¹ f; then the Schur complement of the local constraints (module docs).
+        if !mass.lu.solve(f) {
             return Err(Error::Singular);
         }
-        let zdd = &rhs[4..4 + nz];
+        let present = |j: usize| j < 4 || j - 4 < self.n_body;
         let mut lambda_local = [0.0; MC];
-        for (k, l) in lambda_local.iter_mut().enumerate().take(m) {
-            *l = rhs[4 + nz + k];
+        if m > 0 {
+            let g = &kin.cons.grad;
+            let mut s = SMatrix::<f64, MC, MC>::identity();
+            let mut rhs = SVector::<f64, MC>::zeros();
+            for k in 0..m {
+                let mut gp = [0.0; NW];
+                for (j, gpj) in gp.iter_mut().enumerate() {
+                    *gpj = (0..NW).map(|i| g[k][i] * mass.p_loc[i][j]).sum();
+                }
+                for l in 0..m {
+                    s[(k, l)] = (0..NW).map(|j| gp[j] * g[l][j]).sum();
+                }
+                rhs[k] = (0..NW)
+                    .filter(|&j| present(j))
+                    .map(|j| g[k][j] * f[self.zloc(j) - 4])
+                    .sum::<f64>()
+                    + kin.cons.quad[k];
+            }
+            let lam = small_solve(&s, rhs).ok_or(Error::Singular)?;
+            for j in (0..NW).filter(|&j| present(j)) {
+                let gl: f64 = (0..m).map(|k| g[k][j] * lam[k]).sum();
+                if gl != 0.0 {
+                    let col = &mass.cols[j * nf..(j + 1) * nf];
+                    f.iter_mut().zip(col.iter()).for_each(|(a, c)| *a -= gl * c);
+                }
+            }
+            for (k, l) in lambda_local.iter_mut().enumerate().take(m) {
+                *l = lam[k];
+            }
         }
+        // z̈ (root node clamped at rest).
+        let zdd = |z: usize| if z < 4 { 0.0 } else { f[z - 4] };
         // r = Bᵀ M B δ with δ = x − q̈_i(augmented).
-        let delta: Vec<f64> = (0..ni).map(|i| ai[i] - zdd[self.ind_to_z(i)]).collect();
+        let delta: Vec<f64> = (0..ni).map(|i| ai[i] - zdd(self.ind_to_z(i))).collect();
         let mut y = vec![0.0; nz];
         for (i, d) in delta.iter().enumerate() {
             y[self.ind_to_z(i)] = *d;
@@ -617,7 +810,7 @@ impl FullSolver {
                 .sum::<f64>();
         }
         // Tip/ball block of the Newton matrix: central differences of the local residual.
-        if let (Some(jb), Some(c)) = (jac.as_mut(), ch) {
+        if let Some((jb, c)) = jac.as_mut() {
             let nl = mode.independent().len();
             if m > 0 {
                 let denom = c.c_q.abs() + c.c_v.abs() * 1e-2 + c.c_m.abs() * 1e-4;
@@ -643,14 +836,17 @@ impl FullSolver {
         }
         Ok(Evaluated {
             r,
-            jac,
             kin,
             lambda_local,
         })
     }
 
     /// Newton–Raphson on `x` with `q = q₀ + c_q x`, `v = v₀ + c_v x`, `a = a₀ + c_m x` (the
-    /// core's iteration and criterion).
+    /// core's iteration, criterion and matrix reuse): the Newton matrix is built and factored
+    /// at the first iterate; later iterations evaluate the residual only and reuse the
+    /// factors while the scaled correction at least halves (`‖Δx‖ ≤ ½ ‖Δx_prev‖`); a
+    /// correction that does not is discarded (the iteration still counts) and the matrix is
+    /// rebuilt and refactored at the same iterate.
     #[allow(clippy::too_many_arguments)]
     fn newton(
         &self,
@@ -664,6 +860,7 @@ impl FullSolver {
         mode: Mode,
         warm: &mut [f64; NW],
         theta_ref: f64,
+        full: bool,
     ) -> Result<Solved, Error> {
         let max = self.params.integrator.max_iterations;
         let tol = self.params.integrator.tolerance;
@@ -674,18 +871,32 @@ impl FullSolver {
         } else {
             None
         };
+        let mut guard = lock(&self.work);
+        let Work { mass, reduced } = &mut *guard;
+        let lu = self.reduced_lu(reduced, ni)?;
+        let mut factored = false;
+        let mut refresh = false;
+        let mut previous = 0.0;
         let mut increment = 0.0;
+        let mut dx = vec![0.0; ni];
         for it in 1..=max {
             let q: Vec<f64> = (0..ni).map(|i| q0[i] + ch.c_q * x[i]).collect();
             let v: Vec<f64> = (0..ni).map(|i| v0[i] + ch.c_v * x[i]).collect();
             let a: Vec<f64> = (0..ni).map(|i| a0[i] + ch.c_m * x[i]).collect();
-            let ev = self.evaluate(&q, &v, &a, g_eff, mode, warm, theta_ref, Some(ch))?;
+            let fresh = !factored || refresh || full;
+            let jac = if fresh { Some((&mut *lu, ch)) } else { None };
+            let ev = self.evaluate(mass, jac, &q, &v, &a, g_eff, mode, warm, theta_ref)?;
             if !ev.r.iter().all(|z| z.is_finite()) {
                 return Err(Error::NonFiniteState);
             }
-            let jac = ev.jac.ok_or(Error::Singular)?;
-            let lu = jac.factor().ok_or(Error::Singular)?;
-            let mut dx: Vec<f64> = ev.r.iter().map(|r| -r).collect();
+            if fresh {
+                if !lu.factor() {
+                    return Err(Error::Singular);
+                }
+                factored = true;
+                refresh = false;
+            }
+            dx.iter_mut().zip(ev.r.iter()).for_each(|(d, r)| *d = -r);
             if !lu.solve(&mut dx) {
                 return Err(Error::Singular);
             }
@@ -703,6 +914,11 @@ impl FullSolver {
                 n
             };
             increment = norm(&dx);
+            if !fresh && increment > 0.5 * previous {
+                // The kept matrix does not contract: rebuild it at this iterate.
+                refresh = true;
+                continue;
+            }
             // The core's damping (`Model::damping`): natural monotonicity test with the same
             // factors, λ = 1, ½, … down to the trust-region cap MAX_STEP/‖dx‖.
             let mut lambda = 1.0;
@@ -719,7 +935,7 @@ impl FullSolver {
                     let at: Vec<f64> = (0..ni).map(|i| a0[i] + ch.c_m * xt[i]).collect();
                     let mut w = *warm;
                     if let Ok(et) =
-                        self.evaluate(&qt, &vt, &at, g_eff, mode, &mut w, theta_ref, None)
+                        self.evaluate(mass, None, &qt, &vt, &at, g_eff, mode, &mut w, theta_ref)
                     {
                         let mut bar: Vec<f64> = et.r.iter().map(|r| -r).collect();
                         if et.r.iter().all(|z| z.is_finite())
@@ -739,13 +955,20 @@ impl FullSolver {
             x.iter_mut()
                 .zip(dx.iter())
                 .for_each(|(xi, d)| *xi += d * lambda);
-            if increment <= tol {
+            // The core's settled test: a reused matrix's remaining error θ/(1−θ)‖dx‖ must be
+            // below SETTLE·tol too (absorber_core::newton).
+            let settled = fresh || it == 1 || {
+                let theta = increment / previous;
+                theta * increment <= (1.0 - theta) * tol * SETTLE
+            };
+            if increment <= tol && settled {
                 return Ok(Solved {
                     x,
                     iterations: it,
                     increment,
                 });
             }
+            previous = increment;
         }
         Err(Error::NoConvergence {
             iterations: max,
@@ -829,7 +1052,19 @@ impl FullSolver {
             let target = f64::min(done + step, 1.0);
             let g = self.params.gravity * target;
             let mut trial = warm;
-            match self.newton(&z, &z, &z, x.clone(), &ch, 1.0, g, mode, &mut trial, 0.0) {
+            match self.newton(
+                &z,
+                &z,
+                &z,
+                x.clone(),
+                &ch,
+                1.0,
+                g,
+                mode,
+                &mut trial,
+                0.0,
+                true,
+            ) {
                 Ok(s) => {
                     x = s.x;
                     warm = trial;
@@ -917,6 +1152,7 @@ impl FullSolver {
             mode,
             &mut warm,
             s.theta_ref,
+            true,
         )
     }
 
@@ -957,6 +1193,7 @@ impl FullSolver {
             mode,
             &mut warm,
             s.theta_ref,
+            self.params.integrator.newton == NewtonKind::Full,
         )?;
         let a = &solved.x;
         let qn: Vec<f64> = (0..ni).map(|i| q_pred[i] + a[i] * ch.c_q).collect();
@@ -1031,6 +1268,8 @@ impl FullSolver {
         let ai = self.gather_ind(&s.a, mode);
         let mut warm = self.local_of(&s.q);
         let ev = self.evaluate(
+            &mut lock(&self.work).mass,
+            None,
             &qi,
             &vi,
             &ai,
@@ -1038,7 +1277,6 @@ impl FullSolver {
             mode,
             &mut warm,
             s.theta_ref,
-            None,
         )?;
         Ok(-ev.lambda_local[5])
     }
@@ -1047,6 +1285,10 @@ impl FullSolver {
     pub fn step(&mut self, base_accel: f64) -> Result<StepReport<f64>, Error> {
         if !base_accel.is_finite() {
             return Err(Error::NonFiniteInput);
+        }
+        // The core's input range (absorber_core::model::MAX_BASE_ACCEL): a sensor fault.
+        if base_accel.abs() > absorber_core::model::MAX_BASE_ACCEL {
+            return Err(Error::InputOutOfRange);
         }
         let h = self.params.integrator.step;
         let start = self.state.clone();
@@ -1205,24 +1447,25 @@ impl FullSolver {
                 }
             };
             let mut warm = w;
-            let ev = self.evaluate(
-                &qi,
-                &vi,
-                &ai,
-                self.effective_gravity(s.base_accel),
-                mode,
-                &mut warm,
-                s.theta_ref,
-                Some(&ch),
-            )?;
-            let lu = ev
-                .jac
-                .ok_or(Error::Singular)?
-                .factor()
-                .ok_or(Error::Singular)?;
             let mut y = grad.clone();
-            if !lu.solve(&mut y) {
-                return Err(Error::Singular);
+            {
+                let mut guard = lock(&self.work);
+                let Work { mass, reduced } = &mut *guard;
+                let lu = self.reduced_lu(reduced, ni)?;
+                self.evaluate(
+                    mass,
+                    Some((&mut *lu, &ch)),
+                    &qi,
+                    &vi,
+                    &ai,
+                    self.effective_gravity(s.base_accel),
+                    mode,
+                    &mut warm,
+                    s.theta_ref,
+                )?;
+                if !lu.factor() || !lu.solve(&mut y) {
+                    return Err(Error::Singular);
+                }
             }
             let wgt: f64 = grad.iter().zip(y.iter()).map(|(a, b)| a * b).sum();
             if !wgt.is_finite() || wgt <= 0.0 {
@@ -1274,8 +1517,13 @@ impl FullSolver {
         let z = vec![0.0; qi.len()];
         let g = self.params.gravity;
         let mut warm = self.local_of(&s.q);
-        let m = self
-            .evaluate(
+        let mut guard = lock(&self.work);
+        let Work { mass, reduced } = &mut *guard;
+        let lu = self.reduced_lu(reduced, qi.len())?;
+        let mut derivative = |ch: Chain<f64>| {
+            self.evaluate(
+                mass,
+                Some((&mut *lu, &ch)),
                 &qi,
                 &z,
                 &z,
@@ -1283,33 +1531,19 @@ impl FullSolver {
                 mode,
                 &mut warm,
                 s.theta_ref,
-                Some(&Chain {
-                    c_q: 0.0,
-                    c_v: 0.0,
-                    c_m: 1.0,
-                }),
-            )?
-            .jac
-            .ok_or(Error::Singular)?
-            .to_dense();
-        let k = self
-            .evaluate(
-                &qi,
-                &z,
-                &z,
-                g,
-                mode,
-                &mut warm,
-                s.theta_ref,
-                Some(&Chain {
-                    c_q: 1.0,
-                    c_v: 0.0,
-                    c_m: 0.0,
-                }),
-            )?
-            .jac
-            .ok_or(Error::Singular)?
-            .to_dense();
+            )
+            .map(|_| lu.to_dense())
+        };
+        let m = derivative(Chain {
+            c_q: 0.0,
+            c_v: 0.0,
+            c_m: 1.0,
+        })?;
+        let k = derivative(Chain {
+            c_q: 1.0,
+            c_v: 0.0,
+            c_m: 0.0,
+        })?;
         Ok(((&m + m.transpose()) * 0.5, (&k + k.transpose()) * 0.5))
     }
 
@@ -1483,14 +1717,26 @@ mod tests {
             c_m: 1.0,
         };
         let mut warm = s.local_of(&s.equilibrium.q);
-        let ev = s
-            .evaluate(&qi, &vi, &ai, 9.0, mode, &mut warm, 0.0, Some(&ch))
-            .expect("eval");
-        let jac = ev.jac.expect("jac").to_dense();
+        let mut guard = lock(&s.work);
+        let Work { mass, reduced } = &mut *guard;
+        let lu = s.reduced_lu(reduced, ni).expect("pattern");
+        s.evaluate(
+            mass,
+            Some((&mut *lu, &ch)),
+            &qi,
+            &vi,
+            &ai,
+            9.0,
+            mode,
+            &mut warm,
+            0.0,
+        )
+        .expect("eval");
+        let jac = lu.to_dense();
         let scale = jac.amax();
         for j in 0..ni {
             let h = 1e-2;
-            let pert = |sg: f64| {
+            let mut pert = |sg: f64| {
                 let q: Vec<f64> = (0..ni)
                     .map(|i| qi[i] + if i == j { sg * h * ch.c_q } else { 0.0 })
                     .collect();
@@ -1501,7 +1747,7 @@ mod tests {
                     .map(|i| ai[i] + if i == j { sg * h * ch.c_m } else { 0.0 })
                     .collect();
                 let mut w = warm;
-                s.evaluate(&q, &v, &a, 9.0, mode, &mut w, 0.0, None)
+                s.evaluate(mass, None, &q, &v, &a, 9.0, mode, &mut w, 0.0)
                     .expect("eval")
                     .r
             };

@@ -1054,8 +1054,8 @@ pub fn matrix(length: Length) -> Vec<Case> {
         paper,
         Input::Samples(v),
         (1.2, 1.2),
-        Expect::Error("converge"),
-        "clear error, state kept",
+        Expect::Error("beyond"),
+        "rejected as a sensor fault (|ÿ_b| > 10⁴ m/s²), state kept",
     );
     let mut v = vec![0.0; 400];
     v[200] = f64::NAN;
