@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::plot::{render, Panel, Series};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -337,9 +337,10 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         rcfg,
         runs,
     };
-    std::fs::create_dir_all(out.join("img"))?;
+    std::fs::create_dir_all(out.join("img"))
+        .with_context(|| format!("cannot create `{}`", out.join("img").display()))?;
     let md = ctx.write(&out, a.quick, started)?;
-    std::fs::write(out.join("accuracy.md"), md)?;
+    crate::output::atomic_write(&out.join("accuracy.md"), md.as_bytes())?;
     eprintln!(
         "accuracy: wrote {} ({:.0} s)",
         out.join("accuracy.md").display(),
