@@ -2,6 +2,7 @@
 
 use super::{describe, load, progress_bar};
 use crate::cli::{PaperArgs, RunArgs};
+use crate::excitation::Excitation;
 use crate::figures::{run_plots, PlotData};
 use crate::output::{command_line, with_output, OutputDir, Status};
 use crate::run::{scene_excitation, simulate_with, RunStats, CSV_HEADER};
@@ -83,17 +84,17 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
 /// Runs a scene, feeding every row to `each` (fixed memory); returns the summary.
 fn stream(
     s: &Scene,
+    exc: &Excitation,
     steady_from: f64,
     what: &str,
     mut each: impl FnMut(&crate::run::Row) -> Result<()>,
 ) -> Result<Value> {
-    let exc = scene_excitation(s)?;
     let steps = s.steps();
     let mut stats = RunStats::new(steps as f64 * s.file.integrator.step, steady_from);
     let pb = progress_bar(steps as u64, what);
     let r = simulate_with(
         s,
-        &exc,
+        exc,
         steps,
         |row| {
             stats.push(row);
@@ -114,12 +115,13 @@ pub fn paper(a: &PaperArgs) -> Result<()> {
     let freqs = sim
         .natural_frequencies()
         .map_err(|e| crate::scene::map_core_error(e, &s))?;
-    let free = stream(&s, from, "free ball", |_| Ok(()))?;
+    let exc = scene_excitation(&s)?;
+    let free = stream(&s, &exc, from, "free ball", |_| Ok(()))?;
     let mut locked = None;
     if s.file.kind.free_ball() {
         let mut l = s.clone();
         l.file.kind = Kind::Locked;
-        locked = Some(stream(&l, from, "locked ball", |_| Ok(()))?);
+        locked = Some(stream(&l, &exc, from, "locked ball", |_| Ok(()))?);
     }
     let wall = t0.elapsed().as_secs_f64();
     if a.json {
@@ -171,7 +173,7 @@ pub fn run(a: &RunArgs) -> Result<()> {
         );
     }
     // The excitation (a CSV record) is read and checked before anything is written.
-    scene_excitation(&s)?;
+    let exc = scene_excitation(&s)?;
     let plots = if a.no_plots {
         Vec::new()
     } else {
@@ -191,7 +193,7 @@ pub fn run(a: &RunArgs) -> Result<()> {
         csv.line(CSV_HEADER)?;
         let mut data = (!plots.is_empty()).then(|| PlotData::new(from));
         let mut k = 0u64;
-        let sum = stream(&s, from, "run", |r| {
+        let sum = stream(&s, &exc, from, "run", |r| {
             if let Some(d) = data.as_mut() {
                 d.push(r);
             }
