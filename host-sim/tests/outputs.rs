@@ -189,10 +189,15 @@ fn concurrent_runs_into_one_directory_take_turns() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let mut err = second.stderr.unwrap();
-    let mut buf = [0u8; 200];
-    let n = std::io::Read::read(&mut err, &mut buf).unwrap();
-    let msg = String::from_utf8_lossy(&buf[..n]).to_string();
+    let mut err = std::io::BufReader::new(second.stderr.unwrap());
+    let mut msg = String::new();
+    while !msg.contains("waiting") {
+        let mut line = String::new();
+        if std::io::BufRead::read_line(&mut err, &mut line).unwrap() == 0 {
+            break;
+        }
+        msg.push_str(&line);
+    }
     assert!(
         msg.contains("waiting") && msg.contains(".host-sim.lock"),
         "{msg}"
@@ -273,7 +278,7 @@ fn meaningless_input_is_refused_naming_the_field() {
     r(&["--duration", "-1"], "`duration`");
     r(&["--duration", "1e300"], "`duration`");
     r(&["--duration", "1e6"], "`--every`");
-    r(&["--duration", "20", "--transient", "20"], "`--transient`");
+    r(&["--duration", "20", "--transient", "30"], "`--transient`");
     r(&["--transient", "-1"], "`--transient`");
     r(
         &["--amplitude", "1", "--frequency", "20"],
