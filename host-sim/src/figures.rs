@@ -119,7 +119,7 @@ impl PlotData {
                 });
             }
         }
-        if self.seen % self.stride == 0 {
+        if self.seen.is_multiple_of(self.stride) {
             if self.thin.len() == MAX_POINTS {
                 let mut i = 0;
                 self.thin.retain(|_| {
@@ -128,7 +128,7 @@ impl PlotData {
                 });
                 self.stride *= 2;
             }
-            if self.seen % self.stride == 0 {
+            if self.seen.is_multiple_of(self.stride) {
                 self.thin.push(*r);
             }
         }

@@ -653,7 +653,7 @@ impl Scene {
                 f.integrator.tolerance
             );
         }
-        if !(f.gravity.abs() <= MAX_ACCEL) {
+        if f.gravity.is_nan() || f.gravity.abs() > MAX_ACCEL {
             bail!(
                 "invalid value for `gravity`: {} m/s² (allowed: |gravity| ≤ {MAX_ACCEL} m/s²)",
                 f.gravity
@@ -678,7 +678,7 @@ impl Scene {
             end_mass += p.ball.mass;
         }
         let sag = p.gravity.abs() * l.powi(3) * (end_mass / 3.0 + p.beam.mass / 8.0) / ei;
-        if !(sag <= 0.5 * l) {
+        if sag.is_nan() || sag > 0.5 * l {
             bail!(
                 "invalid values for `beam.modulus`/`beam.inertia`/`beam.length`: the beam cannot carry its load \
                  (estimated static sag {sag:.3e} m, more than half its length {l} m); allowed: a sag below L/2 \
@@ -727,7 +727,7 @@ pub fn check_harmonic(
     freq_key: &str,
 ) -> Result<()> {
     let nyquist = 0.5 / h;
-    if !(frequency < nyquist) {
+    if frequency.is_nan() || frequency >= nyquist {
         bail!(
             "invalid value for `{freq_key}`: {frequency} Hz is at or above the step's Nyquist limit \
              1/(2h) = {nyquist} Hz (h = {h} s); allowed: below {nyquist} Hz (well below: at least \
@@ -736,7 +736,7 @@ pub fn check_harmonic(
     }
     let w = std::f64::consts::TAU * frequency;
     let peak = amplitude * w * w;
-    if !(peak <= MAX_ACCEL) {
+    if peak.is_nan() || peak > MAX_ACCEL {
         bail!(
             "invalid value for `{amp_key}`: {amplitude} m at {frequency} Hz is a peak base acceleration of \
              {peak:.4e} m/s²; allowed: at most {MAX_ACCEL} m/s² (≈ 100 g)"

@@ -125,6 +125,8 @@ fn a_failed_run_keeps_the_previous_result_and_says_it_failed() {
 }
 
 /// Starts a long run into `d` and waits until it streams its CSV (a partial file with data).
+/// The caller kills and waits for it.
+#[allow(clippy::zombie_processes)]
 fn start_long_run(d: &Path) -> std::process::Child {
     let child = bin()
         .args([
@@ -182,14 +184,14 @@ fn concurrent_runs_into_one_directory_take_turns() {
     let d = dir("lock");
     let mut first = start_long_run(&d);
     // The second command waits for the lock (and says so) until the first one ends.
-    let second = bin()
+    let mut second = bin()
         .args(["run", "--duration", "1", "--no-plots", "--out"])
         .arg(&d)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let mut err = std::io::BufReader::new(second.stderr.unwrap());
+    let mut err = std::io::BufReader::new(second.stderr.take().unwrap());
     let mut msg = String::new();
     while !msg.contains("waiting") {
         let mut line = String::new();
@@ -208,15 +210,8 @@ fn concurrent_runs_into_one_directory_take_turns() {
     let mut rest = String::new();
     std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
     // The second one ran after the first ended: a complete result, no torn file.
-    loop {
-        if d.join("paper.manifest.json").exists() {
-            let m = manifest(&d, "paper");
-            if m["status"] == "complete" {
-                break;
-            }
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+    assert!(second.wait().unwrap().success());
+    assert_eq!(manifest(&d, "paper")["status"], "complete");
     let csv = std::fs::read_to_string(d.join("paper.csv")).unwrap();
     assert_eq!(csv.lines().filter(|l| !l.starts_with('#')).count(), 1 + 334);
 }

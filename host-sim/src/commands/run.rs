@@ -197,7 +197,7 @@ pub fn run(a: &RunArgs) -> Result<()> {
             if let Some(d) = data.as_mut() {
                 d.push(r);
             }
-            let write = k % every as u64 == 0;
+            let write = k.is_multiple_of(every as u64);
             k += 1;
             if write {
                 csv.line(&r.csv())
