@@ -158,6 +158,8 @@ pub fn run(a: &RunArgs) -> Result<()> {
     let t0 = Instant::now();
     let s = load(&a.scene)?;
     let f = &s.file;
+    // The excitation (a CSV record) is read and checked before anything else.
+    let exc = scene_excitation(&s)?;
     let from = steady_start(a.transient, &s)?;
     let every = a.every.unwrap_or(f.outputs.every);
     if every == 0 {
@@ -172,8 +174,6 @@ pub fn run(a: &RunArgs) -> Result<()> {
             (steps as u64).div_ceil(MAX_CSV_ROWS - 1)
         );
     }
-    // The excitation (a CSV record) is read and checked before anything is written.
-    let exc = scene_excitation(&s)?;
     let plots = if a.no_plots {
         Vec::new()
     } else {
