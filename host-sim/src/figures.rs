@@ -142,6 +142,19 @@ impl PlotData {
         }
     }
 
+    /// Sizes of the buffers: FFT samples, envelope buckets, thinned rows (all bounded).
+    pub fn sizes(&self) -> (usize, usize, usize) {
+        (self.fft.len(), self.buckets.len(), self.thin.len())
+    }
+
+    /// Largest value of envelope quantity `i` (0: tip deflection) over the run.
+    pub fn envelope_max(&self, i: usize) -> f64 {
+        self.buckets
+            .iter()
+            .map(|b| b.hi[i])
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
     fn envelope(&self, label: &str, i: usize, scale: f64) -> Series {
         let mut pts = Vec::with_capacity(2 * self.buckets.len());
         for b in &self.buckets {

@@ -192,18 +192,18 @@ pub fn render(
         }
         if !panel.failed.is_empty() {
             let y = y0 + 0.04 * (y1 - y0);
-            let red = RGBColor(200, 0, 0);
+            let mark = BLACK;
             chart
                 .draw_series(
                     panel
                         .failed
                         .iter()
                         .filter(|x| x.is_finite())
-                        .map(|&x| Cross::new((x, y), 6, red.stroke_width(3))),
+                        .map(|&x| Cross::new((x, y), 6, mark.stroke_width(3))),
                 )
                 .map_err(|e| err(&e))?
                 .label("failed run (no value)")
-                .legend(move |(x, y)| Cross::new((x + 9, y), 5, red.stroke_width(3)));
+                .legend(move |(x, y)| Cross::new((x + 9, y), 5, mark.stroke_width(3)));
             legend = true;
         }
         if legend {

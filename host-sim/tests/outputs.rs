@@ -423,3 +423,127 @@ fn readme_shows_what_paper_prints() {
     assert!(o.status.success());
     assert_eq!(String::from_utf8_lossy(&o.stdout), shown);
 }
+
+/// A scene whose runs fail mid-way at 4.13 Hz (the ball reaches the stops and two Newton
+/// iterations no longer suffice) but not at 3.9 Hz.
+fn failing_scene(d: &Path) -> PathBuf {
+    let p = d.join("budget.toml");
+    std::fs::write(&p, "name = \"budget\"\n[integrator]\nmax_iterations = 2\n").unwrap();
+    p
+}
+
+#[test]
+fn a_sweep_with_a_failed_point_marks_it_and_exits_3() {
+    let d = dir("sweep-failed");
+    let scene = failing_scene(&d);
+    let o = bin()
+        .args([
+            "sweep",
+            "--duration",
+            "10",
+            "--last",
+            "5",
+            "--freqs",
+            "3.9,4.13",
+        ])
+        .arg("--scene")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&d)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = out.lines().find(|l| l.contains("4.130")).unwrap();
+    assert!(line.contains("FAILED") && line.contains("step"), "{line}");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("1 of 2 sweep runs failed"));
+    let csv = std::fs::read_to_string(d.join("sweep.csv")).unwrap();
+    assert!(csv.contains("\n3.9,ok,"), "{csv}");
+    assert!(csv.contains("\n4.13,failed,,,,,,,step "), "{csv}");
+    let m = manifest(&d, "sweep");
+    assert_eq!(m["status"], "points-failed");
+    assert_eq!(names(&m), ["sweep.csv", "sweep.png"]);
+}
+
+#[test]
+fn a_fatigue_study_with_a_failed_point_marks_it_and_exits_3() {
+    let d = dir("fatigue-failed");
+    let scene = failing_scene(&d);
+    let o = bin()
+        .args([
+            "fatigue",
+            "--duration",
+            "10",
+            "--freqs",
+            "3.9,4.13",
+            "--no-plots",
+        ])
+        .arg("--scene")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&d)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = out.lines().find(|l| l.contains("4.130")).unwrap();
+    // Only the frequency and the amplitude before FAILED: no damage rate of a failed run.
+    let (before, _) = line.split_once("FAILED").unwrap();
+    assert_eq!(before.split_whitespace().count(), 2, "{line}");
+    let csv = std::fs::read_to_string(d.join("fatigue.csv")).unwrap();
+    let row = csv.lines().find(|l| l.starts_with("4.13,")).unwrap();
+    assert!(row.starts_with("4.13,0.0005,failed,,,,,,,,,,,,,"), "{row}");
+    assert_eq!(manifest(&d, "fatigue")["status"], "points-failed");
+}
+
+#[test]
+fn plot_buffers_stay_bounded_on_long_runs() {
+    use host_sim::figures::PlotData;
+    use host_sim::run::{Row, RunStats};
+    let mut data = PlotData::new(10.0);
+    let mut stats = RunStats::new(3e4, 10.0);
+    let row0 = Row {
+        t: 0.0,
+        base_y: 0.0,
+        tip_y: 0.0,
+        tip_deflection: 0.0,
+        tip_angle: 0.0,
+        ball_angle: 0.0,
+        ball_rel_angle: 0.0,
+        energies: host_sim::absorber_core::Energies {
+            beam_strain: 0.0,
+            beam_kinetic: 0.0,
+            beam_potential: 0.0,
+            tip_kinetic: 0.0,
+            tip_potential: 0.0,
+            ball_kinetic: 0.0,
+            ball_potential: 0.0,
+        },
+        iterations: 1,
+        impact: false,
+        base_accel: 0.0,
+        tip_velocity: 0.0,
+        tip_rate: 0.0,
+        ball_rate: 0.0,
+        ball_rel_rate: 0.0,
+        ball_spin: 0.0,
+        ball_spin_rate: 0.0,
+    };
+    let n = 3_000_000usize;
+    for k in 0..=n {
+        let t = k as f64 * 0.01;
+        let r = Row {
+            t,
+            tip_deflection: (t * 26.0).sin() + if k == n / 2 { 10.0 } else { 0.0 },
+            ..row0
+        };
+        data.push(&r);
+        stats.push(&r);
+    }
+    let (len, buckets, thin) = data.sizes();
+    assert!(len <= host_sim::figures::MAX_FFT, "{len}");
+    assert!(buckets <= 10_000 && thin <= 20_000, "{buckets} {thin}");
+    // The min/max envelope keeps the single spike that uniform thinning would drop.
+    assert!(data.envelope_max(0) > 9.0, "{}", data.envelope_max(0));
+    assert!(stats.json()["tip_amplitude_max"].as_f64().unwrap() > 9.0);
+}
