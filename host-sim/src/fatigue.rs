@@ -31,7 +31,7 @@ pub struct RunFatigue {
     /// Stop impacts.
     pub impacts: u32,
     /// Residue overflows (0 = exact counting).
-    pub overflows: u32,
+    pub overflows: u64,
     /// Simulated time [s].
     pub time: f64,
     /// Why the run stopped early.
