@@ -1290,7 +1290,8 @@ pub struct StabilityArgs {
     /// Short runs only (the subset of `cargo test`), no long runs, no drift study.
     #[arg(long)]
     pub quick: bool,
-    /// Only cases whose group or name contains this text.
+    /// Only cases whose group or name contains this text. A subset never replaces
+    /// docs/stability.md: give `--out` another file.
     #[arg(long)]
     pub only: Option<String>,
     /// Length of the drift study \[s\] (f32 beside f64 at 3.70 Hz).
