@@ -554,3 +554,31 @@ fn plot_buffers_stay_bounded_on_long_runs() {
     assert!(data.envelope_max(0) > 9.0, "{}", data.envelope_max(0));
     assert!(stats.json()["tip_amplitude_max"].as_f64().unwrap() > 9.0);
 }
+
+/// A write that fails (here: the file size limit, as a full disk would) names the file, keeps
+/// the previous result and leaves nothing that looks complete.
+#[cfg(unix)]
+#[test]
+fn a_failed_write_names_the_file_and_keeps_the_previous_result() {
+    let d = dir("efbig");
+    let ds = d.to_str().unwrap();
+    let o = run(&["run", "--duration", "1", "--no-plots", "--out", ds]);
+    assert!(o.status.success());
+    let csv = std::fs::read(d.join("paper.csv")).unwrap();
+    // 200 blocks of 512 bytes: the CSV of a 20 s run (about 2.3 MB) does not fit.
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f 200; exec '{}' run --duration 20 --no-plots --out '{ds}'",
+            env!("CARGO_BIN_EXE_host-sim")
+        ))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("cannot write") && e.contains("paper.csv"), "{e}");
+    assert_eq!(std::fs::read(d.join("paper.csv")).unwrap(), csv);
+    assert_eq!(manifest(&d, "paper")["status"], "failed");
+    assert_eq!(visible(&d), ["paper.csv", "paper.manifest.json"]);
+    assert!(partials(&d).is_empty());
+}
