@@ -439,3 +439,30 @@ pub fn atomic_write(path: &Path, content: &[u8]) -> Result<()> {
         .map_err(|e| anyhow!("cannot write `{}`: {}", path.display(), e.error))?;
     Ok(())
 }
+
+/// Lets `produce` write a file at a temporary path beside `path` (same extension: encoders pick
+/// the format from it), then renames it into place: `path` is either the old file or the new
+/// complete one. Without a lock (see [`OutputDir`] for a command's set of files).
+pub fn atomic_with(path: &Path, produce: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    let tmp = builder()
+        .prefix(PARTIAL_PREFIX)
+        .suffix(&ext)
+        .tempfile_in(dir)
+        .map_err(|e| write_error(path, &e))?
+        .into_temp_path();
+    produce(&tmp)?;
+    File::open(&tmp)
+        .and_then(|f| f.sync_all())
+        .map_err(|e| write_error(path, &e))?;
+    tmp.persist(path)
+        .map_err(|e| anyhow!("cannot write `{}`: {}", path.display(), e.error))?;
+    Ok(())
+}

@@ -118,7 +118,8 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Draws `panels` on a grid of `rows × cols` into a PNG of `width × height` pixels.
+/// Draws `panels` on a grid of `rows × cols` into a PNG of `width × height` pixels (written
+/// beside `path` and renamed into place when complete).
 pub fn render(
     path: &Path,
     title: &str,
@@ -127,8 +128,22 @@ pub fn render(
     cols: usize,
     size: (u32, u32),
 ) -> Result<()> {
+    crate::output::atomic_with(path, |tmp| {
+        draw(tmp, title, panels, rows, cols, size)
+            .map_err(|e| anyhow!("plot `{}`: {e:#}", path.display()))
+    })
+}
+
+fn draw(
+    path: &Path,
+    title: &str,
+    panels: &[Panel],
+    rows: usize,
+    cols: usize,
+    size: (u32, u32),
+) -> Result<()> {
     fonts();
-    let err = |e: &dyn std::fmt::Display| anyhow!("plot `{}`: {e}", path.display());
+    let err = |e: &dyn std::fmt::Display| anyhow!("{e}");
     let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let root = root

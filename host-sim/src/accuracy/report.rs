@@ -769,10 +769,15 @@ impl Ctx {
     }
 
     fn plot_pareto(&self, out: &Path, pts: &[(f64, f64)], front: &[bool]) -> Result<()> {
+        crate::output::atomic_with(&out.join("img/accuracy_pareto.png"), |p| {
+            self.plot_pareto_at(p, pts, front)
+        })
+    }
+
+    fn plot_pareto_at(&self, path: &Path, pts: &[(f64, f64)], front: &[bool]) -> Result<()> {
         use plotters::prelude::*;
         use plotters::style::{register_font, FontStyle};
         let _ = register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
-        let path = out.join("img/accuracy_pareto.png");
         let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("plot {}: {e}", path.display());
         let fin: Vec<(f64, f64, usize)> = pts
             .iter()
@@ -786,7 +791,7 @@ impl Ctx {
         let (y0, y1) = fin.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
             (a.min(p.1), b.max(p.1))
         });
-        let root = BitMapBackend::new(&path, (1300, 850)).into_drawing_area();
+        let root = BitMapBackend::new(path, (1300, 850)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(
