@@ -275,6 +275,7 @@ fn meaningless_input_is_refused_naming_the_field() {
     r(&["--duration", "1e6"], "`--every`");
     r(&["--duration", "20", "--transient", "30"], "`--transient`");
     r(&["--transient", "-1"], "`--transient`");
+    r(&["--duration", "20", "--transient", "20"], "leaves 0 steps");
     r(
         &["--amplitude", "1", "--frequency", "20"],
         "`excitation.amplitude`",
@@ -581,4 +582,28 @@ fn a_failed_write_names_the_file_and_keeps_the_previous_result() {
     assert_eq!(manifest(&d, "paper")["status"], "failed");
     assert_eq!(visible(&d), ["paper.csv", "paper.manifest.json"]);
     assert!(partials(&d).is_empty());
+}
+
+#[test]
+fn a_short_run_gets_a_real_steady_state_window() {
+    // 20 s with the default 20 s transient: the second half, not a window of one step.
+    let d = dir("short");
+    let o = run(&[
+        "run",
+        "--duration",
+        "20",
+        "--no-plots",
+        "--json",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let s = &v["summary"];
+    assert!(
+        (s["steady_from"].as_f64().unwrap() - 10.0).abs() < 0.01,
+        "{s}"
+    );
+    assert!(s["tip_amplitude_steady"].as_f64().unwrap() > 1e-3, "{s}");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("second half"));
 }

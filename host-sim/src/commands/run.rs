@@ -14,20 +14,35 @@ use std::time::Instant;
 /// Largest number of CSV rows of one run (about 350 bytes each); use `--every` beyond.
 pub const MAX_CSV_ROWS: u64 = 20_000_000;
 
-/// Start of the steady-state window: `--transient` (checked: 0 ≤ it < the run), else the
-/// scene's `outputs.transient` (the same check, except that the built-in default 20 s on a run
-/// of at most 20 s falls back to the second half, with a note).
+/// Start of the steady-state window: `--transient` (checked: 0 ≤ it, and it leaves at least
+/// [`MIN_STEADY_STEPS`] steps of the run), else the scene's `outputs.transient` (the same
+/// check, except that the built-in default 20 s on a run shorter than 40 s falls back to the
+/// run's second half, with a note). A window shorter than one excitation period is warned about.
 fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
-    let end = s.steps() as f64 * s.file.integrator.step;
+    let h = s.file.integrator.step;
+    let end = s.steps() as f64 * h;
     let check = |t: f64, key: &str| -> Result<f64> {
         if !t.is_finite() || t < 0.0 {
             bail!("invalid value for `{key}`: {t} (must be finite and not negative)");
         }
-        if t >= end {
+        let left = ((end - t) / h).round();
+        if left < MIN_STEADY_STEPS as f64 {
             bail!(
-                "invalid value for `{key}`: {t} s is not shorter than the run ({end} s); allowed: \
-                 0 ≤ transient < duration"
+                "invalid value for `{key}`: {t} s leaves {} steps of the run ({end} s) for the steady \
+                 state; allowed: 0 ≤ transient ≤ {} s (at least {MIN_STEADY_STEPS} steps after it)",
+                left.max(0.0),
+                end - MIN_STEADY_STEPS as f64 * h
             );
+        }
+        if s.file.excitation.kind == crate::scene::ExcitationType::Harmonic {
+            let period = 1.0 / s.file.excitation.frequency_or_paper();
+            if end - t < period {
+                eprintln!(
+                    "warning: the steady-state window after `{key}` = {t} s is {:.4} s, shorter than one \
+                     excitation period ({period:.4} s): its amplitudes are not steady-state amplitudes",
+                    end - t
+                );
+            }
         }
         Ok(t)
     };
@@ -36,16 +51,19 @@ fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
     }
     let t = s.file.outputs.transient;
     let default = crate::scene::OutputsSection::default().transient;
-    if t >= end && t == default {
+    if t == default && t > end / 2.0 {
         eprintln!(
-            "note: the default transient ({default} s) is not shorter than the run ({end} s); the \
-             steady-state figures use its second half (t ≥ {} s); set --transient to choose",
+            "note: the default transient ({default} s) would leave less than half of the run ({end} s); \
+             the steady-state figures use its second half (t ≥ {} s); set --transient to choose",
             end / 2.0
         );
         return Ok(end / 2.0);
     }
     check(t, "outputs.transient")
 }
+
+/// Fewest steps a steady-state window may hold.
+pub const MIN_STEADY_STEPS: usize = 10;
 
 fn num(v: &Value, k: &str) -> f64 {
     v.get(k).and_then(|x| x.as_f64()).unwrap_or(f64::NAN)
