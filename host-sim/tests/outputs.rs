@@ -294,6 +294,10 @@ fn meaningless_input_is_refused_naming_the_field() {
     refused(&["sweep", "--freqs", "4,500", "--out", ds], "`--freqs`");
     refused(&["sweep", "--last", "60", "--out", ds], "`--last`");
     refused(
+        &["sweep", "--last", "0.01", "--out", ds],
+        "at least 10 steps",
+    );
+    refused(
         &["fatigue", "--amplitudes", "1", "--freqs", "20", "--out", ds],
         "`--amplitudes`",
     );

@@ -27,11 +27,12 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         "--amplitude",
     )?;
     let duration = s.steps() as f64 * h;
-    if !a.last.is_finite() || a.last <= 0.0 || a.last >= duration {
+    if !a.last.is_finite() || a.last < 10.0 * h || a.last >= duration {
         bail!(
-            "invalid value for `--last`: {} (the steady-state window must be positive and shorter than \
-             the run, {duration} s)",
-            a.last
+            "invalid value for `--last`: {} (the steady-state window must hold at least 10 steps, \
+             {} s, and be shorter than the run, {duration} s)",
+            a.last,
+            10.0 * h
         );
     }
     let pool = pool(a.jobs)?;
