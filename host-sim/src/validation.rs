@@ -13,6 +13,12 @@ use anyhow::Result;
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// Palette index of each scene, the same on every panel: free ball with Table 1 (N = 3), with
+/// Table 1 on the converged mesh, with the tuned R, locked ball.
+const TABLE1: usize = 0;
+const TUNED: usize = 2;
+const LOCKED: usize = 3;
+
 /// The paper's sweep frequencies (Fig. 10) \[Hz\].
 pub const PAPER_FREQUENCIES: [f64; 14] = [
     3.50, 3.70, 3.80, 3.85, 3.90, 3.95, 4.00, 4.05, 4.10, 4.13, 4.25, 4.40, 4.50, 4.70,
@@ -404,9 +410,9 @@ pub fn write(
                 "t [s]",
                 "deflection [mm]",
                 vec![
-                    Series::line("locked ball", series(&locked413, |r| r.tip_deflection * 1e3)),
-                    Series::line("free ball, Table 1", series(&free413, |r| r.tip_deflection * 1e3)),
-                    Series::line("free ball, tuned R", series(&tuned413, |r| r.tip_deflection * 1e3)),
+                    Series::line("locked ball", series(&locked413, |r| r.tip_deflection * 1e3)).colored(LOCKED),
+                    Series::line("free ball, Table 1", series(&free413, |r| r.tip_deflection * 1e3)).colored(TABLE1),
+                    Series::line("free ball, tuned R", series(&tuned413, |r| r.tip_deflection * 1e3)).colored(TUNED),
                 ],
             ),
             Panel::new(
@@ -414,8 +420,8 @@ pub fn write(
                 "t [s]",
                 "α [deg]",
                 vec![
-                    Series::line("free ball, Table 1", series(&free413, |r| r.ball_rel_angle.to_degrees())),
-                    Series::line("free ball, tuned R", series(&tuned413, |r| r.ball_rel_angle.to_degrees())),
+                    Series::line("free ball, Table 1", series(&free413, |r| r.ball_rel_angle.to_degrees())).colored(TABLE1),
+                    Series::line("free ball, tuned R", series(&tuned413, |r| r.ball_rel_angle.to_degrees())).colored(TUNED),
                 ],
             ),
             Panel::new(
