@@ -53,11 +53,16 @@ pub enum Command {
     /// [rad/s], ball_spin φ [rad], ball_spin_rate [rad/s]. Base velocity and displacement are
     /// closed form for a harmonic excitation and integrated (zero mean) for a CSV one.
     ///
-    /// Plots `<out>/<name>_{time,fft,phase,energy}.png`: time histories, FFT of tip and ball
-    /// after the transient, phase planes (y–ẏ, θ–θ̇, φ–φ̇, θ–ψ), energy curves.
+    /// Plots `<out>/<name>_{time,fft,phase,energy}.png`: time histories (min/max envelopes),
+    /// FFT of tip and ball after the transient (at most the last 2^20 samples), phase planes
+    /// (y–ẏ, θ–θ̇, φ–φ̇, θ–ψ), energy curves. Then `<out>/<name>.manifest.json`: the command,
+    /// its status and files. The CSV is streamed (fixed memory); a run has at most 10^9 steps
+    /// and its CSV at most 2·10^7 rows (use --every), else it is refused before any work.
     Run(RunArgs),
     /// Frequency response (paper Fig. 10): one run per frequency in parallel, steady-state
-    /// amplitudes of the tip [m] and the ball [deg] over the last part; CSV and PNG.
+    /// amplitudes of the tip [m] and the ball [deg] over the last part; CSV, PNG and
+    /// `sweep.manifest.json`. A run that fails is marked FAILED (no numbers) in the table, the
+    /// CSV (`status` column) and the plot (a cross), and the command exits with code 3.
     Sweep(SweepArgs),
     /// Track radius R that puts the ball at half the beam's first frequency (coupled
     /// linearized model), by bisection.
@@ -66,7 +71,8 @@ pub enum Command {
     /// writes docs/stability.md.
     Stability(crate::stability::StabilityArgs),
     /// Fatigue damage rate at the clamp vs frequency, free vs locked ball (root stress,
-    /// rainflow, AASHTO S–N, Miner): CSV and PNG.
+    /// rainflow, AASHTO S–N, Miner): CSV, PNG and `fatigue.manifest.json`; failed points are
+    /// marked as in `sweep` (exit code 3).
     Fatigue(FatigueArgs),
     /// Writes docs/accuracy.md: error of embedded configurations (elements, step, precision,
     /// Newton budget) against a converged full-solver reference, and their run time.
