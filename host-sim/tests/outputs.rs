@@ -611,3 +611,37 @@ fn a_short_run_gets_a_real_steady_state_window() {
     assert!(s["tip_amplitude_steady"].as_f64().unwrap() > 1e-3, "{s}");
     assert!(String::from_utf8_lossy(&o.stderr).contains("second half"));
 }
+
+/// The time column is k·h at step k, impacts or not. Fails today: a step with a stop impact
+/// does not advance `Model::time` (`advance` sets `steps + 1`, then `step_with_impact` returns
+/// a state with the old count), so a 5 s run with 6 impacts ends at 4.983 s and per-hour rates
+/// and time windows shift. The fix belongs in absorber-core's model.rs (being rewritten).
+#[test]
+#[ignore = "absorber-core: an impact step does not advance the model time (see the comment)"]
+fn the_time_column_advances_one_step_per_step_with_impacts() {
+    let d = dir("time");
+    let o = run(&[
+        "run",
+        "--duration",
+        "5",
+        "--no-plots",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let csv = std::fs::read_to_string(d.join("paper.csv")).unwrap();
+    let rows: Vec<&str> = csv
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .collect();
+    let impacts = rows
+        .iter()
+        .filter(|l| l.split(',').nth(15) == Some("1"))
+        .count();
+    assert!(impacts > 0);
+    for (k, l) in rows.iter().enumerate() {
+        let t: f64 = l.split(',').next().unwrap().parse().unwrap();
+        assert!((t - k as f64 * 0.003).abs() < 1e-9, "row {k}: t = {t}");
+    }
+}
