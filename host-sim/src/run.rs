@@ -13,7 +13,7 @@ pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simula
     match f.solver {
         Solver::Core => {
             crate::core_sim::build(f.kind, f.elements, f.precision, &params, base_accel0)
-                .map_err(|e| crate::scene::map_core_error(e, scene))
+                .map_err(|e| start_error(e, scene))
         }
         Solver::Full => {
             use crate::full::{FullSolver, SceneKind};
@@ -29,9 +29,22 @@ pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simula
                 Kind::FreeNostops => SceneKind::FreeBallNoStops,
             };
             let sim = FullSolver::at_rest(params, kind, f.elements, base_accel0)
-                .map_err(|e| crate::scene::map_core_error(e, scene))?;
+                .map_err(|e| start_error(e, scene))?;
             Ok(Box::new(sim))
         }
+    }
+}
+
+/// A failure to start: a parameter error names its key; a failed static solve says so.
+fn start_error(e: absorber_core::Error, scene: &Scene) -> anyhow::Error {
+    match e {
+        absorber_core::Error::InvalidParameter { .. } => crate::scene::map_core_error(e, scene),
+        other => anyhow!(
+            "cannot start: the static equilibrium under gravity could not be solved ({}); check \
+             that the magnitudes of `beam.*`, `tip.*`, `ball.*` and `gravity` describe a beam that \
+             can carry its load",
+            crate::scene::physical_failure(other, scene)
+        ),
     }
 }
 

@@ -659,6 +659,12 @@ impl Scene {
                 f.gravity
             );
         }
+        if p.beam.length < 1e-3 {
+            bail!(
+                "invalid value for `beam.length`: {} m (allowed: at least 1e-3 m)",
+                p.beam.length
+            );
+        }
         let ei = p.beam.modulus * p.beam.inertia;
         if !ei.is_normal() || ei > 1e12 {
             bail!(
@@ -680,9 +686,10 @@ impl Scene {
         let sag = p.gravity.abs() * l.powi(3) * (end_mass / 3.0 + p.beam.mass / 8.0) / ei;
         if sag.is_nan() || sag > 0.5 * l {
             bail!(
-                "invalid values for `beam.modulus`/`beam.inertia`/`beam.length`: the beam cannot carry its load \
-                 (estimated static sag {sag:.3e} m, more than half its length {l} m); allowed: a sag below L/2 \
-                 (stiffer or shorter beam, lighter masses or smaller gravity)"
+                "invalid values for `beam.modulus`/`beam.inertia`/`beam.length` against the load \
+                 `beam.mass`/`tip.mass`/`ball.mass`/`gravity`: the beam cannot carry it (estimated static \
+                 sag {sag:.3e} m, more than half its length {l} m); allowed: a sag below L/2 (stiffer or \
+                 shorter beam, lighter masses or smaller gravity)"
             );
         }
         Ok(())

@@ -285,6 +285,8 @@ fn meaningless_input_is_refused_naming_the_field() {
         ("gravity = 1e300\n", "gravity"),
         ("[beam]\ninertia = 1e-300\n", "beam.inertia"),
         ("[beam]\nlength = 100.0\n", "beam.length"),
+        ("[beam]\nlength = 1e-300\n", "beam.length"),
+        ("[tip]\nmass = 1e300\n", "tip.mass"),
         ("[outputs]\ntransient = 70.0\n", "outputs.transient"),
     ] {
         let p = d.join("s.toml");
@@ -386,6 +388,17 @@ fn physical_failures_say_what_happened_in_words() {
     );
     let m = host_sim::scene::physical_failure(absorber_core::Error::NonFiniteState, &s);
     assert!(m.contains("diverged"), "{m}");
+    // A static solve that fails says so and points at the magnitudes.
+    let p = std::env::temp_dir().join(format!("host-sim-out-{}-tiny.toml", std::process::id()));
+    std::fs::write(&p, "[beam]\nmass = 1e-300\n").unwrap();
+    let o = run(&["static", "--scene", p.to_str().unwrap()]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("static equilibrium") && e.contains("`beam.*`"),
+        "{e}"
+    );
+    assert!(!e.contains("state kept"), "{e}");
 }
 
 #[test]
