@@ -10,7 +10,7 @@ fn sine<T: absorber_core::Real>(
     periods: usize,
     rule: ThresholdRule,
     cat: DetailCategory,
-) -> (Miner<T>, u32) {
+) -> (Miner<T>, u64) {
     let mut rf = Rainflow::<T, 16>::new(T::zero()).unwrap();
     let mut miner = Miner::<T>::new(cat.curve(rule)).unwrap();
     for k in 0..=periods * 40 {

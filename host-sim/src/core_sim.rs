@@ -182,21 +182,37 @@ fn boxed<T: Real + Send, S: Scene + Send, const N: usize, const D: usize>(
     }))
 }
 
-macro_rules! by_elements {
-    ($t:ty, $s:ty, $extra:literal, $n:expr, $p:expr, $a:expr, $st:expr) => {
+/// The one way to pick the number of beam elements N at compile time: `match`es the run-time
+/// `$n` over the listed element counts and calls `$f::<generics…, N, D>(args…)` with
+/// D = 4 N + `$extra` (the core's unknowns: 4 per element, plus 1 for a free ball);
+/// `$other` for any other count. Used by every command and study that builds core models.
+///
+/// `with_elements!(n, [1, 3, 8], 1, boxed [f64, FreeBall] (params, a0), Err(...))`
+#[macro_export]
+macro_rules! with_elements {
+    (@call $f:ident [$($g:ty),*] $k:tt $extra:tt ($($arg:expr),*)) => {
+        $f::<$($g,)* $k, { 4 * $k + $extra }>($($arg),*)
+    };
+    ($n:expr, [$($k:tt),*], $extra:tt, $f:ident $gen:tt $args:tt, $other:expr) => {
         match $n {
-            1 => boxed::<$t, $s, 1, { 4 + $extra }>($p, $a, $st),
-            2 => boxed::<$t, $s, 2, { 8 + $extra }>($p, $a, $st),
-            3 => boxed::<$t, $s, 3, { 12 + $extra }>($p, $a, $st),
-            4 => boxed::<$t, $s, 4, { 16 + $extra }>($p, $a, $st),
-            6 => boxed::<$t, $s, 6, { 24 + $extra }>($p, $a, $st),
-            8 => boxed::<$t, $s, 8, { 32 + $extra }>($p, $a, $st),
-            16 => boxed::<$t, $s, 16, { 64 + $extra }>($p, $a, $st),
-            _ => Err(Error::InvalidParameter {
+            $( $k => $crate::with_elements!(@call $f $gen $k $extra $args), )*
+            _ => $other,
+        }
+    };
+}
+
+macro_rules! by_elements {
+    ($t:ty, $s:ty, $extra:tt, $n:expr, $p:expr, $a:expr, $st:expr) => {
+        $crate::with_elements!(
+            $n,
+            [1, 2, 3, 4, 6, 8, 16],
+            $extra,
+            boxed[$t, $s]($p, $a, $st),
+            Err(Error::InvalidParameter {
                 field: "elements",
                 reason: "supported: 1, 2, 3, 4, 6, 8, 16",
-            }),
-        }
+            })
+        )
     };
 }
 

@@ -1,9 +1,10 @@
 //! Base excitation: harmonic, or measured acceleration from a CSV file.
 //!
-//! Everything is sampled on the step grid t_k = k h. The solver's input is the base
-//! acceleration ÿ_b(t_k) \[m/s²\]; velocity ẏ_b and displacement y_b (for the absolute tip
-//! position and the energies) are closed form for the harmonic case and integrated by the
-//! trapezoidal rule for a CSV, with zero mean velocity and displacement over the record.
+//! Everything is on the step grid t_k = k h. The solver's input is the base acceleration
+//! ÿ_b(t_k) \[m/s²\] (for a CSV record: its average over each step, so that nothing between
+//! grid points is lost); velocity ẏ_b and displacement y_b (for the absolute tip position and
+//! the energies) are closed form for the harmonic case and integrated for a CSV, with zero mean
+//! velocity and displacement over the record.
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -20,13 +21,13 @@ pub enum Excitation {
         /// Step h \[s\].
         step: f64,
     },
-    /// Measured acceleration resampled to the step h (linear interpolation).
+    /// Measured acceleration reduced to the step h (average over each step's cell).
     Sampled {
         /// Step h \[s\].
         step: f64,
         /// ÿ_b(t_k).
         accel: Vec<f64>,
-        /// ẏ_b(t_k) (trapezoidal integral, zero mean).
+        /// ẏ_b(t_k) (exact integral of the record, zero mean).
         velocity: Vec<f64>,
         /// y_b(t_k) (trapezoidal integral of ẏ_b, zero mean).
         displacement: Vec<f64>,
@@ -94,21 +95,42 @@ impl Excitation {
         }
     }
 
-    /// Reads a CSV of `t, accel` and resamples it to the grid t_k = k h, k = 0 … `steps`
-    /// (`steps = None`: as far as the file reaches). See [`Excitation::from_csv_text`].
+    /// Reads a CSV of `t, accel` and reduces it to the grid t_k = k h, k = 0 … `steps`
+    /// (`steps = None`: as far as the file reaches). See [`Excitation::from_csv_text`]; its
+    /// warnings are printed on stderr.
     pub fn from_csv(path: &Path, step: f64, steps: Option<usize>) -> Result<Self> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read excitation CSV `{}`", path.display()))?;
-        Self::from_csv_text(&text, step, steps)
-            .with_context(|| format!("excitation CSV `{}`", path.display()))
+        let (e, warnings) = Self::from_csv_checked(&text, step, steps)
+            .with_context(|| format!("excitation CSV `{}`", path.display()))?;
+        for w in warnings {
+            eprintln!("warning: excitation CSV `{}`: {w}", path.display());
+        }
+        Ok(e)
+    }
+
+    /// As [`Excitation::from_csv_checked`], without the warnings.
+    pub fn from_csv_text(text: &str, step: f64, steps: Option<usize>) -> Result<Self> {
+        Self::from_csv_checked(text, step, steps).map(|(e, _)| e)
     }
 
     /// Parses CSV text: two columns `t [s], accel [m/s²]`, separated by a comma (or
-    /// whitespace/semicolon); lines starting with `#` and an optional header line are skipped.
-    /// Times must be finite and strictly increasing and start at or before 0; the grid must not
-    /// extend past the last sample; the samples must be no coarser than 10 h apart (so that the
-    /// resampling does not invent the signal between them).
-    pub fn from_csv_text(text: &str, step: f64, steps: Option<usize>) -> Result<Self> {
+    /// whitespace/semicolon); a UTF-8 byte-order mark, lines starting with `#` and an optional
+    /// header line are skipped. Times must be finite and strictly increasing and start at or
+    /// before 0; the grid must not extend past the last sample; the samples must be no coarser
+    /// than 10 h apart; |accel| at most [`crate::scene::MAX_ACCEL`].
+    ///
+    /// The record (linear between its samples) is reduced to the step grid by its average over
+    /// each step's cell [t_k − h/2, t_k + h/2] (the initial value at k = 0), so that nothing
+    /// between grid points is dropped: the velocity change over the record is kept exactly, and
+    /// ẏ_b(t_k) is the exact integral of the record. Returns warnings: when the record holds
+    /// content the step cannot resolve (more than 10 % of its RMS differs from the reduced signal).
+    pub fn from_csv_checked(
+        text: &str,
+        step: f64,
+        steps: Option<usize>,
+    ) -> Result<(Self, Vec<String>)> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut t = Vec::new();
         let mut a = Vec::new();
         for (n, line) in text.lines().enumerate() {
@@ -137,6 +159,14 @@ impl Excitation {
             let (ti, ai) = (vals[0], vals[1]);
             if !ti.is_finite() || !ai.is_finite() {
                 bail!("line {}: value is not finite", n + 1);
+            }
+            if ai.abs() > crate::scene::MAX_ACCEL {
+                bail!(
+                    "line {}: acceleration {ai} m/s² is beyond what the model represents (allowed: \
+                     |accel| ≤ {} m/s², about 100 g)",
+                    n + 1,
+                    crate::scene::MAX_ACCEL
+                );
             }
             if let Some(&prev) = t.last() {
                 if ti <= prev {
@@ -175,24 +205,24 @@ impl Excitation {
             Some(s) => s,
             None => available,
         };
+        let rec = Record::new(&t, &a);
         let mut accel = Vec::with_capacity(n + 1);
-        let mut j = 0;
+        let mut velocity = Vec::with_capacity(n + 1);
+        let f0 = rec.integral(0.0);
         for k in 0..=n {
             let tk = k as f64 * step;
-            while j + 2 < t.len() && t[j + 1] < tk {
-                j += 1;
-            }
-            let (t0, t1) = (t[j], t[j + 1]);
-            let w = ((tk - t0) / (t1 - t0)).clamp(0.0, 1.0);
-            accel.push(a[j] + w * (a[j + 1] - a[j]));
+            accel.push(if k == 0 {
+                rec.value(0.0)
+            } else {
+                let lo = (tk - 0.5 * step).max(t[0]);
+                let hi = (tk + 0.5 * step).min(last);
+                (rec.integral(hi) - rec.integral(lo)) / (hi - lo)
+            });
+            velocity.push(rec.integral(tk) - f0);
         }
-        // Trapezoidal integrals; the constants of integration make the mean velocity and the
-        // mean displacement over the resampled record zero (a vibrating pole does not drift; an
-        // integral from rest would drift by the unknown initial velocity times t).
-        let mut velocity = vec![0.0; n + 1];
-        for k in 1..=n {
-            velocity[k] = velocity[k - 1] + 0.5 * step * (accel[k - 1] + accel[k]);
-        }
+        // The constants of integration make the mean velocity and the mean displacement over the
+        // record zero (a vibrating pole does not drift; an integral from rest would drift by the
+        // unknown initial velocity times t).
         let mean_v = trapezoid_mean(&velocity);
         velocity.iter_mut().for_each(|v| *v -= mean_v);
         let mut displacement = vec![0.0; n + 1];
@@ -201,12 +231,83 @@ impl Excitation {
         }
         let mean_y = trapezoid_mean(&displacement);
         displacement.iter_mut().for_each(|y| *y -= mean_y);
-        Ok(Self::Sampled {
-            step,
-            accel,
-            velocity,
-            displacement,
-        })
+        // Bandwidth: how much of the record (over the run) the reduced signal misses.
+        let end = n as f64 * step;
+        let (mut sum, mut sum2, mut res2, mut m) = (0.0, 0.0, 0.0, 0usize);
+        for (&ti, &ai) in t.iter().zip(&a) {
+            if ti < 0.0 || ti > end {
+                continue;
+            }
+            let x = ti / step;
+            let k = (x.floor() as usize).min(n.saturating_sub(1));
+            let w = (x - k as f64).clamp(0.0, 1.0);
+            let r = accel[k] + w * (accel[(k + 1).min(n)] - accel[k]);
+            sum += ai;
+            sum2 += ai * ai;
+            res2 += (ai - r) * (ai - r);
+            m += 1;
+        }
+        let mut warnings = Vec::new();
+        if m > 1 {
+            let mean = sum / m as f64;
+            let var = (sum2 / m as f64 - mean * mean).max(0.0);
+            let lost = (res2 / m as f64).sqrt();
+            if var > 0.0 && lost > 0.1 * var.sqrt() {
+                warnings.push(format!(
+                    "the record has content faster than the step h = {step} s resolves (Nyquist {:.1} Hz): \
+                     {:.0} % of its RMS is averaged out over each step (the velocity change is kept); \
+                     use a smaller step to follow it",
+                    0.5 / step,
+                    100.0 * lost / var.sqrt()
+                ));
+            }
+        }
+        Ok((
+            Self::Sampled {
+                step,
+                accel,
+                velocity,
+                displacement,
+            },
+            warnings,
+        ))
+    }
+}
+
+/// A record, linear between its samples, with its running integral.
+struct Record<'a> {
+    t: &'a [f64],
+    a: &'a [f64],
+    f: Vec<f64>,
+}
+
+impl<'a> Record<'a> {
+    fn new(t: &'a [f64], a: &'a [f64]) -> Self {
+        let mut f = vec![0.0; t.len()];
+        for i in 1..t.len() {
+            f[i] = f[i - 1] + 0.5 * (a[i - 1] + a[i]) * (t[i] - t[i - 1]);
+        }
+        Self { t, a, f }
+    }
+
+    /// Segment containing x (clamped to the record).
+    fn seg(&self, x: f64) -> usize {
+        let i = self.t.partition_point(|&ti| ti <= x);
+        i.clamp(1, self.t.len() - 1) - 1
+    }
+
+    fn value(&self, x: f64) -> f64 {
+        let j = self.seg(x);
+        let (t0, t1) = (self.t[j], self.t[j + 1]);
+        let w = ((x - t0) / (t1 - t0)).clamp(0.0, 1.0);
+        self.a[j] + w * (self.a[j + 1] - self.a[j])
+    }
+
+    /// ∫ from the first sample to x.
+    fn integral(&self, x: f64) -> f64 {
+        let j = self.seg(x);
+        let x = x.clamp(self.t[0], *self.t.last().unwrap_or(&x));
+        self.f[j] + 0.5 * (x - self.t[j]) * (self.a[j] + self.value(x))
     }
 }
 

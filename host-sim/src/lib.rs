@@ -1,15 +1,26 @@
 //! Host tools for the absorber: full solver, scenes, sweeps, plots, reports.
+//!
+//! Layout (dependencies point down only):
+//! - [`cli`] (options) → [`commands`] (what each command does);
+//! - the studies: [`stability`], [`accuracy`], [`validation`] (they write docs/), [`fatigue`],
+//!   [`sweep`], [`tune`];
+//! - running a scene: [`scene`], [`excitation`], [`run`] (streamed), [`figures`], [`plot`];
+//! - the solvers behind [`sim::Simulator`]: [`core_sim`] (the embedded core; N is picked at
+//!   compile time by the one macro [`with_elements!`]) and [`full`] (the full solver);
+//! - [`output`]: the one writer of every file (atomic, manifest, lock).
 pub use absorber_core;
 pub mod full;
 pub mod sim;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
 pub mod accuracy;
 pub mod cli;
+pub mod commands;
 pub mod core_sim;
 pub mod excitation;
 pub mod fatigue;
 pub mod fft;
 pub mod figures;
+pub mod output;
 pub mod plot;
 pub mod run;
 pub mod scene;

@@ -23,7 +23,11 @@ fn main() -> ExitCode {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {
             eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
-            ExitCode::FAILURE
+            if e.downcast_ref::<host_sim::output::PointsFailed>().is_some() {
+                ExitCode::from(host_sim::output::EXIT_POINTS_FAILED)
+            } else {
+                ExitCode::FAILURE
+            }
         }
         Err(_) => ExitCode::from(101),
     }

@@ -28,6 +28,8 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     /// Draw markers instead of a line (for sweeps).
     pub markers: bool,
+    /// Fixed palette index (one colour per scene across panels); default: the position.
+    pub color: Option<usize>,
 }
 
 impl Series {
@@ -37,6 +39,7 @@ impl Series {
             label: label.into(),
             points,
             markers: false,
+            color: None,
         }
     }
     /// Line with markers.
@@ -45,7 +48,13 @@ impl Series {
             label: label.into(),
             points,
             markers: true,
+            color: None,
         }
+    }
+    /// The same curve in palette colour `i` (the same scene in the same colour on every panel).
+    pub fn colored(mut self, i: usize) -> Self {
+        self.color = Some(i);
+        self
     }
 }
 
@@ -60,6 +69,8 @@ pub struct Panel {
     pub y: String,
     /// Curves.
     pub series: Vec<Series>,
+    /// x positions of failed points (drawn as red crosses on the bottom axis, labelled).
+    pub failed: Vec<f64>,
 }
 
 impl Panel {
@@ -70,7 +81,14 @@ impl Panel {
             x: x.into(),
             y: y.into(),
             series,
+            failed: Vec::new(),
         }
+    }
+
+    /// Marks failed points at these x positions.
+    pub fn with_failed(mut self, xs: Vec<f64>) -> Self {
+        self.failed = xs;
+        self
     }
 }
 
@@ -100,7 +118,8 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Draws `panels` on a grid of `rows × cols` into a PNG of `width × height` pixels.
+/// Draws `panels` on a grid of `rows × cols` into a PNG of `width × height` pixels (written
+/// beside `path` and renamed into place when complete).
 pub fn render(
     path: &Path,
     title: &str,
@@ -109,8 +128,22 @@ pub fn render(
     cols: usize,
     size: (u32, u32),
 ) -> Result<()> {
+    crate::output::atomic_with(path, |tmp| {
+        draw(tmp, title, panels, rows, cols, size)
+            .map_err(|e| anyhow!("plot `{}`: {e:#}", path.display()))
+    })
+}
+
+fn draw(
+    path: &Path,
+    title: &str,
+    panels: &[Panel],
+    rows: usize,
+    cols: usize,
+    size: (u32, u32),
+) -> Result<()> {
     fonts();
-    let err = |e: &dyn std::fmt::Display| anyhow!("plot `{}`: {e}", path.display());
+    let err = |e: &dyn std::fmt::Display| anyhow!("{e}");
     let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let root = root
@@ -122,7 +155,8 @@ pub fn render(
             panel
                 .series
                 .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.0)),
+                .flat_map(|s| s.points.iter().map(|p| p.0))
+                .chain(panel.failed.iter().copied()),
         );
         let (y0, y1) = range(
             panel
@@ -149,7 +183,7 @@ pub fn render(
             .map_err(|e| err(&e))?;
         let mut legend = false;
         for (i, s) in panel.series.iter().enumerate() {
-            let color = COLORS[i % COLORS.len()];
+            let color = COLORS[s.color.unwrap_or(i) % COLORS.len()];
             let pts: Vec<(f64, f64)> = s
                 .points
                 .iter()
@@ -170,6 +204,22 @@ pub fn render(
                     .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
                     .map_err(|e| err(&e))?;
             }
+        }
+        if !panel.failed.is_empty() {
+            let y = y0 + 0.04 * (y1 - y0);
+            let mark = BLACK;
+            chart
+                .draw_series(
+                    panel
+                        .failed
+                        .iter()
+                        .filter(|x| x.is_finite())
+                        .map(|&x| Cross::new((x, y), 6, mark.stroke_width(3))),
+                )
+                .map_err(|e| err(&e))?
+                .label("failed run (no value)")
+                .legend(move |(x, y)| Cross::new((x + 9, y), 5, mark.stroke_width(3)));
+            legend = true;
         }
         if legend {
             chart

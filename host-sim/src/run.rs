@@ -5,7 +5,6 @@ use crate::excitation::{self, Excitation};
 use crate::scene::{Scene, Solver};
 use crate::sim::Simulator;
 use anyhow::{anyhow, bail, Result};
-use std::io::Write;
 
 /// Builds the scene's solver at rest in the static equilibrium with input `base_accel0` at t = 0.
 pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simulator>> {
@@ -14,7 +13,7 @@ pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simula
     match f.solver {
         Solver::Core => {
             crate::core_sim::build(f.kind, f.elements, f.precision, &params, base_accel0)
-                .map_err(|e| crate::scene::map_core_error(e, scene))
+                .map_err(|e| start_error(e, scene))
         }
         Solver::Full => {
             use crate::full::{FullSolver, SceneKind};
@@ -30,9 +29,22 @@ pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simula
                 Kind::FreeNostops => SceneKind::FreeBallNoStops,
             };
             let sim = FullSolver::at_rest(params, kind, f.elements, base_accel0)
-                .map_err(|e| crate::scene::map_core_error(e, scene))?;
+                .map_err(|e| start_error(e, scene))?;
             Ok(Box::new(sim))
         }
+    }
+}
+
+/// A failure to start: a parameter error names its key; a failed static solve says so.
+fn start_error(e: absorber_core::Error, scene: &Scene) -> anyhow::Error {
+    match e {
+        absorber_core::Error::InvalidParameter { .. } => crate::scene::map_core_error(e, scene),
+        other => anyhow!(
+            "cannot start: the static equilibrium under gravity could not be solved ({}); check \
+             that the magnitudes of `beam.*`, `tip.*`, `ball.*` and `gravity` describe a beam that \
+             can carry its load",
+            crate::scene::physical_failure(other, scene)
+        ),
     }
 }
 
@@ -137,6 +149,26 @@ pub fn simulate(
     exc: &Excitation,
     steps: usize,
     mut sink: impl FnMut(&Row),
+    progress: impl FnMut(usize),
+) -> Result<()> {
+    simulate_with(
+        scene,
+        exc,
+        steps,
+        |r| {
+            sink(r);
+            Ok(())
+        },
+        progress,
+    )
+}
+
+/// As [`simulate`], with a sink that can fail (e.g. a full disk): its error ends the run.
+pub fn simulate_with(
+    scene: &Scene,
+    exc: &Excitation,
+    steps: usize,
+    mut sink: impl FnMut(&Row) -> Result<()>,
     mut progress: impl FnMut(usize),
 ) -> Result<()> {
     let params = scene.params()?;
@@ -166,13 +198,14 @@ pub fn simulate(
             ball_spin_rate: o.tip_rate - spin_ratio * o.ball_relative_rate,
         }
     };
-    sink(&row(sim.as_ref(), 0, 0, false));
+    sink(&row(sim.as_ref(), 0, 0, false))?;
     for k in 1..=steps {
         let b = exc.at(k);
         let report = sim.step(b.accel).map_err(|e| {
             anyhow!(
-                "step {k} (t = {:.4} s) failed: {}",
+                "step {k} of {steps} (t = {:.4} s, base acceleration {:.4e} m/s²) failed: {}",
                 k as f64 * scene.file.integrator.step,
+                b.accel,
                 scene_error(e, scene)
             )
         })?;
@@ -181,7 +214,7 @@ pub fn simulate(
             k,
             report.iterations,
             report.impact.is_some(),
-        ));
+        ))?;
         if k % 500 == 0 {
             progress(k);
         }
@@ -199,26 +232,128 @@ pub fn scene_excitation(scene: &Scene) -> Result<Excitation> {
     excitation::of_scene(scene, scene.steps())
 }
 
-/// Runs a scene for its duration and keeps every row.
+/// Runs a scene for its duration and keeps every row (for the fixed, short runs of the
+/// reports; commands stream with [`simulate`] and [`RunStats`]).
 pub fn run_rows(scene: &Scene, progress: impl FnMut(usize)) -> Result<Vec<Row>> {
     let exc = scene_excitation(scene)?;
     let steps = scene.steps();
-    let mut rows = Vec::with_capacity(steps + 1);
+    let mut rows = Vec::new();
+    rows.try_reserve(steps + 1)
+        .map_err(|_| anyhow!("a run of {steps} steps does not fit in memory here"))?;
     simulate(scene, &exc, steps, |r| rows.push(*r), progress)?;
     Ok(rows)
 }
 
-/// Writes rows (every `every`-th) as CSV with the documented header.
-pub fn write_csv(path: &std::path::Path, rows: &[Row], every: usize) -> Result<()> {
-    let file = std::fs::File::create(path)
-        .map_err(|e| anyhow!("cannot create `{}`: {e}", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "{CSV_HEADER}")?;
-    for r in rows.iter().step_by(every.max(1)) {
-        writeln!(w, "{}", r.csv())?;
+/// Summary figures of a run, accumulated row by row in fixed memory.
+#[derive(Clone, Debug)]
+pub struct RunStats {
+    steady_from: f64,
+    window: f64,
+    end: f64,
+    first: Option<Row>,
+    last_t: f64,
+    tip_max: f64,
+    tip_lo: f64,
+    tip_hi: f64,
+    ball_max: f64,
+    ball_lo: f64,
+    ball_hi: f64,
+    impacts: u64,
+    max_iterations: u32,
+    beam_first: (f64, u64),
+    beam_last: (f64, u64),
+    ball_first: (f64, u64),
+    ball_last: (f64, u64),
+}
+
+impl RunStats {
+    /// For a run ending at `end` \[s\] whose steady state starts at `steady_from` \[s\]; the mean
+    /// energies are taken over the first and the last min(10 s, end/2).
+    pub fn new(end: f64, steady_from: f64) -> Self {
+        Self {
+            steady_from,
+            window: 10.0f64.min(end / 2.0),
+            end,
+            first: None,
+            last_t: 0.0,
+            tip_max: f64::NAN,
+            tip_lo: f64::INFINITY,
+            tip_hi: f64::NEG_INFINITY,
+            ball_max: f64::NAN,
+            ball_lo: f64::INFINITY,
+            ball_hi: f64::NEG_INFINITY,
+            impacts: 0,
+            max_iterations: 0,
+            beam_first: (0.0, 0),
+            beam_last: (0.0, 0),
+            ball_first: (0.0, 0),
+            ball_last: (0.0, 0),
+        }
     }
-    w.flush()?;
-    Ok(())
+
+    /// Adds a row.
+    pub fn push(&mut self, r: &Row) {
+        let first = *self.first.get_or_insert(*r);
+        let static_d = first.tip_deflection;
+        self.last_t = r.t;
+        let d = r.tip_deflection - static_d;
+        if d.is_finite() {
+            self.tip_max = self.tip_max.max(d.abs());
+        }
+        let th = r.ball_angle.to_degrees();
+        if th.is_finite() {
+            self.ball_max = self.ball_max.max(th.abs());
+        }
+        // Half a step of slack: the grid time k·h may round just below the window start.
+        let eps = 1e-9 * self.end.max(1.0);
+        if r.t >= self.steady_from - eps {
+            self.tip_lo = self.tip_lo.min(r.tip_deflection);
+            self.tip_hi = self.tip_hi.max(r.tip_deflection);
+            if th.is_finite() {
+                self.ball_lo = self.ball_lo.min(th);
+                self.ball_hi = self.ball_hi.max(th);
+            }
+        }
+        self.impacts += u64::from(r.impact);
+        self.max_iterations = self.max_iterations.max(r.iterations);
+        let e = &r.energies;
+        let beam = e.beam_strain - first.energies.beam_strain + e.beam_kinetic + e.beam_potential;
+        let ball = e.ball_kinetic + e.ball_potential;
+        let add = |acc: &mut (f64, u64), x: f64| {
+            acc.0 += x;
+            acc.1 += 1;
+        };
+        if r.t <= self.window + eps {
+            add(&mut self.beam_first, beam);
+            add(&mut self.ball_first, ball);
+        }
+        if r.t >= self.end - self.window - eps {
+            add(&mut self.beam_last, beam);
+            add(&mut self.ball_last, ball);
+        }
+    }
+
+    /// The summary as JSON (the `run`/`paper` output).
+    pub fn json(&self) -> serde_json::Value {
+        let half = |lo: f64, hi: f64| if lo <= hi { 0.5 * (hi - lo) } else { f64::NAN };
+        let mean = |a: (f64, u64)| if a.1 > 0 { a.0 / a.1 as f64 } else { f64::NAN };
+        serde_json::json!({
+            "duration": self.last_t,
+            "steady_from": self.steady_from,
+            "static_tip_deflection": self.first.map(|r| r.tip_deflection).unwrap_or(f64::NAN),
+            "tip_amplitude_max": self.tip_max,
+            "tip_amplitude_steady": half(self.tip_lo, self.tip_hi),
+            "ball_angle_max_deg": self.ball_max,
+            "ball_angle_steady_deg": half(self.ball_lo, self.ball_hi),
+            "impacts": self.impacts,
+            "max_iterations": self.max_iterations,
+            "energy_window": self.window,
+            "beam_energy_first": mean(self.beam_first),
+            "beam_energy_last": mean(self.beam_last),
+            "ball_energy_first": mean(self.ball_first),
+            "ball_energy_last": mean(self.ball_last),
+        })
+    }
 }
 
 /// Half the peak-to-peak value of `x` over the samples with t ≥ `from` (NaN if none).

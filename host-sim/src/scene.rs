@@ -504,7 +504,8 @@ impl Scene {
             );
         }
         finite_positive(f.duration, "duration")?;
-        self.params()?;
+        let p = self.params()?;
+        self.check_limits(&p)?;
         let e = &f.excitation;
         match e.kind {
             ExcitationType::Harmonic => {
@@ -514,6 +515,13 @@ impl Scene {
                 }
                 let fr = e.frequency_or_paper();
                 finite_positive(fr, "excitation.frequency")?;
+                check_harmonic(
+                    a,
+                    fr,
+                    f.integrator.step,
+                    "excitation.amplitude",
+                    "excitation.frequency",
+                )?;
                 if e.file.is_some() {
                     bail!("`excitation.file` is only for type = \"csv\"");
                 }
@@ -611,15 +619,155 @@ impl Scene {
         Ok(p)
     }
 
-    /// Number of steps of `duration`.
+    /// Number of steps of `duration` (validated scenes: 1 ..= [`MAX_STEPS`]).
     pub fn steps(&self) -> usize {
-        (self.file.duration / self.file.integrator.step).round() as usize
+        let n = (self.file.duration / self.file.integrator.step).round();
+        if n.is_finite() && n >= 0.0 {
+            (n as usize).min(MAX_STEPS as usize)
+        } else {
+            0
+        }
+    }
+
+    /// Host-side limits beyond the core's parameter checks: the run length, a Newton
+    /// tolerance that can give the documented accuracy, magnitudes the model can represent.
+    fn check_limits(&self, p: &Params<f64>) -> Result<()> {
+        let f = &self.file;
+        let h = f.integrator.step;
+        let n = f.duration / h;
+        if n.round() < 1.0 {
+            bail!(
+                "invalid value for `duration`: {} s is shorter than one step (integrator.step = {h} s); \
+                 allowed: at least one step",
+                f.duration
+            );
+        }
+        if n.round() > MAX_STEPS as f64 {
+            bail!(
+                "invalid value for `duration`: {} s is {:.3e} steps of {h} s; allowed: at most {:.0e} steps \
+                 (a run is limited to {:.0e} steps; use a larger step or a shorter duration)",
+                f.duration,
+                n,
+                MAX_STEPS as f64,
+                MAX_STEPS as f64
+            );
+        }
+        if f.integrator.tolerance > MAX_TOLERANCE {
+            bail!(
+                "invalid value for `integrator.tolerance`: {} (allowed: at most {MAX_TOLERANCE:e}; a looser \
+                 Newton tolerance does not give the documented accuracy; default 1e-5, scale it with h²)",
+                f.integrator.tolerance
+            );
+        }
+        if f.gravity.is_nan() || f.gravity.abs() > MAX_ACCEL {
+            bail!(
+                "invalid value for `gravity`: {} m/s² (allowed: |gravity| ≤ {MAX_ACCEL} m/s²)",
+                f.gravity
+            );
+        }
+        if p.beam.length < 1e-3 {
+            bail!(
+                "invalid value for `beam.length`: {} m (allowed: at least 1e-3 m)",
+                p.beam.length
+            );
+        }
+        let ei = p.beam.modulus * p.beam.inertia;
+        if !ei.is_normal() || ei > 1e12 {
+            bail!(
+                "invalid value for `beam.modulus` × `beam.inertia`: E·I = {ei:e} N·m² is not representable \
+                 (allowed: 1e-300 < E·I ≤ 1e12 N·m²)"
+            );
+        }
+        // Static sag of a cantilever under its load: tip masses at the end, the beam's own
+        // weight distributed (wL⁴/8EI). A beam that sags more than half its length cannot carry
+        // the scene (the static solve would fail with a message about Newton).
+        let l = p.beam.length;
+        let mut end_mass = 0.0;
+        if f.kind != Kind::Beam {
+            end_mass += p.tip.mass;
+        }
+        if f.kind.has_ball() {
+            end_mass += p.ball.mass;
+        }
+        let sag = p.gravity.abs() * l.powi(3) * (end_mass / 3.0 + p.beam.mass / 8.0) / ei;
+        if sag.is_nan() || sag > 0.5 * l {
+            bail!(
+                "invalid values for `beam.modulus`/`beam.inertia`/`beam.length` against the load \
+                 `beam.mass`/`tip.mass`/`ball.mass`/`gravity`: the beam cannot carry it (estimated static \
+                 sag {sag:.3e} m, more than half its length {l} m); allowed: a sag below L/2 (stiffer or \
+                 shorter beam, lighter masses or smaller gravity)"
+            );
+        }
+        Ok(())
+    }
+
+    /// Warnings about settings that are allowed but poorly resolved (printed on stderr).
+    pub fn warnings(&self) -> Vec<String> {
+        let f = &self.file;
+        let mut w = Vec::new();
+        if f.excitation.kind == ExcitationType::Harmonic {
+            let fr = f.excitation.frequency_or_paper();
+            let h = f.integrator.step;
+            if let Some(m) = harmonic_warning(fr, h, "excitation.frequency") {
+                w.push(m);
+            }
+        }
+        w
     }
 
     /// The scene as TOML text (with a comment header).
     pub fn to_toml(&self) -> Result<String> {
         Ok(toml::to_string(&self.file)?)
     }
+}
+
+/// Largest number of steps of one run (memory stays fixed, but time and disk do not).
+pub const MAX_STEPS: u64 = 1_000_000_000;
+/// Loosest Newton tolerance accepted (the documented accuracy needs 1e-5 at h = 3 ms).
+pub const MAX_TOLERANCE: f64 = 1e-3;
+/// Largest base acceleration (harmonic peak or CSV sample) and |gravity| \[m/s²\] (≈ 100 g).
+pub const MAX_ACCEL: f64 = 1000.0;
+/// Fewest steps per excitation period without a warning.
+pub const STEPS_PER_PERIOD_WARN: f64 = 20.0;
+
+/// Checks a harmonic excitation against the step: below the Nyquist limit 1/(2h), peak
+/// acceleration A (2πf)² at most [`MAX_ACCEL`]. Errors name `amp_key`/`freq_key`.
+pub fn check_harmonic(
+    amplitude: f64,
+    frequency: f64,
+    h: f64,
+    amp_key: &str,
+    freq_key: &str,
+) -> Result<()> {
+    let nyquist = 0.5 / h;
+    if frequency.is_nan() || frequency >= nyquist {
+        bail!(
+            "invalid value for `{freq_key}`: {frequency} Hz is at or above the step's Nyquist limit \
+             1/(2h) = {nyquist} Hz (h = {h} s); allowed: below {nyquist} Hz (well below: at least \
+             {STEPS_PER_PERIOD_WARN} steps per period), or use a smaller step"
+        );
+    }
+    let w = std::f64::consts::TAU * frequency;
+    let peak = amplitude * w * w;
+    if peak.is_nan() || peak > MAX_ACCEL {
+        bail!(
+            "invalid value for `{amp_key}`: {amplitude} m at {frequency} Hz is a peak base acceleration of \
+             {peak:.4e} m/s²; allowed: at most {MAX_ACCEL} m/s² (≈ 100 g)"
+        );
+    }
+    Ok(())
+}
+
+/// A warning when a period of `frequency` has fewer than [`STEPS_PER_PERIOD_WARN`] steps.
+pub fn harmonic_warning(frequency: f64, h: f64, key: &str) -> Option<String> {
+    let per = 1.0 / (frequency * h);
+    (per < STEPS_PER_PERIOD_WARN).then(|| {
+        format!(
+            "warning: `{key}` = {frequency} Hz has only {per:.1} steps per period (h = {h} s); \
+             the step resolves it poorly (amplitude and phase errors); use h ≤ {:.3e} s",
+            1.0 / (STEPS_PER_PERIOD_WARN * frequency)
+        )
+    })
 }
 
 fn finite_positive(x: f64, key: &str) -> Result<()> {
@@ -676,7 +824,35 @@ pub fn map_core_error(e: absorber_core::Error, scene: &Scene) -> anyhow::Error {
             };
             anyhow!("invalid value for `{key}`: {value} ({reason})")
         }
-        other => anyhow!(other),
+        other => anyhow!(physical_failure(other, scene)),
+    }
+}
+
+/// A failure of the solution (not of the input) in words a user understands, with the likely
+/// cause and what to try.
+pub fn physical_failure(e: absorber_core::Error, scene: &Scene) -> String {
+    use absorber_core::Error as E;
+    let h = scene.file.integrator.step;
+    let tol = scene.file.integrator.tolerance;
+    match e {
+        E::NoConvergence { iterations, increment } => format!(
+            "the solver did not converge: after {iterations} Newton iterations the correction was still \
+             {increment:.2e} (tolerance {tol:e}); likely cause: the motion changes too fast for the step \
+             h = {h} s (violent input, stop impacts, a very flexible or very stiff beam); try a smaller \
+             `integrator.step` (--step) or a larger `integrator.max_iterations`"
+        ),
+        E::Singular => "the equations of motion became singular (the model reached a configuration it \
+             cannot represent, e.g. a beam folded over or a vanishing mass); likely cause: an excitation \
+             or parameters far outside the model's range"
+            .to_string(),
+        E::NonFiniteState => format!(
+            "the motion diverged (positions or velocities became infinite); likely cause: an excitation \
+             or parameters far outside the model's range, or a step h = {h} s too large for them"
+        ),
+        E::NonFiniteInput => {
+            "the base acceleration is not a finite number (check the excitation)".to_string()
+        }
+        other => other.to_string(),
     }
 }
 

@@ -30,7 +30,8 @@ pub struct SweepPoint {
     pub impacts: u32,
     /// Largest Newton iteration count of a step.
     pub max_iterations: u32,
-    /// Why the run stopped early (amplitudes then cover what was computed).
+    /// Why the run failed (then the figures above cover only what was computed and are not
+    /// reported by the commands).
     pub error: Option<String>,
 }
 
@@ -104,17 +105,32 @@ pub fn sweep(
         .collect())
 }
 
-/// CSV of a sweep.
+impl SweepPoint {
+    /// The run failed (its amplitudes are not reported).
+    pub fn failed(&self) -> bool {
+        self.error.is_some()
+    }
+}
+
+/// CSV of a sweep. A failed point has status `failed`, no numbers and the error.
 pub fn csv(points: &[SweepPoint]) -> String {
     let mut s = String::from(
         "# host-sim sweep: steady-state amplitudes over the last part of each run\n\
-         # frequency [Hz]; tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
+         # frequency [Hz]; status: ok, or failed (then no numbers; error says why); tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
          # ball_max_deg: max |theta| [deg]; ball_amplitude_deg: half peak-to-peak theta [deg]; impacts; max_iterations; error\n\
-         frequency,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,max_iterations,error\n",
+         frequency,status,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,max_iterations,error\n",
     );
     for p in points {
+        if let Some(e) = &p.error {
+            s.push_str(&format!(
+                "{},failed,,,,,,,{}\n",
+                p.frequency,
+                e.replace([',', '\n'], ";")
+            ));
+            continue;
+        }
         s.push_str(&format!(
-            "{},{:.6e},{:.6e},{:.4},{:.4},{},{},{}\n",
+            "{},ok,{:.6e},{:.6e},{:.4},{:.4},{},{},\n",
             p.frequency,
             p.tip_amplitude,
             p.tip_mean,
@@ -122,7 +138,6 @@ pub fn csv(points: &[SweepPoint]) -> String {
             p.ball_amplitude_deg,
             p.impacts,
             p.max_iterations,
-            p.error.as_deref().unwrap_or("").replace(',', ";")
         ));
     }
     s

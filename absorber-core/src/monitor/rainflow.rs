@@ -182,7 +182,7 @@ impl<T: Real> TurningPoints<T> {
 pub struct Rainflow<T, const CAP: usize> {
     turning: TurningPoints<T>,
     stack: Vec<T, CAP>,
-    overflows: u32,
+    overflows: u64,
     reversals: u64,
 }
 
@@ -227,7 +227,7 @@ impl<T: Real, const CAP: usize> Rainflow<T, CAP> {
         }
         if self.stack.push(p).is_err() {
             // Unreachable after `evict` (CAP ≥ 5); keep the count honest if it ever happens.
-            self.overflows += 1;
+            self.overflows = self.overflows.saturating_add(1);
             return;
         }
         loop {
@@ -266,7 +266,7 @@ impl<T: Real, const CAP: usize> Rainflow<T, CAP> {
             full: true,
         });
         self.drop_points(2, 2);
-        self.overflows += 1;
+        self.overflows = self.overflows.saturating_add(1);
     }
 
     /// Removes the `count` points starting at `at`, keeping the order of the rest (as
@@ -347,12 +347,33 @@ impl<T: Real, const CAP: usize> Rainflow<T, CAP> {
     }
 
     /// How often a full residue forced the conservative pair removal (0 = exact counting).
-    pub fn overflows(&self) -> u32 {
+    /// 64 bits: a counter of 32 would wrap after 4.3·10⁹ evictions (years of a monitor).
+    pub fn overflows(&self) -> u64 {
         self.overflows
     }
 
     /// Turning points confirmed so far.
     pub fn reversals(&self) -> u64 {
         self.reversals
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_eviction_counter_does_not_wrap_at_2_pow_32() {
+        let mut rf = Rainflow::<f64, 5>::new(0.0).unwrap();
+        rf.overflows = u64::from(u32::MAX);
+        // A decaying oscillation closes no cycle: it fills the residue (5 points) and forces
+        // evictions.
+        let mut n = 0usize;
+        for k in 0..40 {
+            let a = (40 - k) as f64;
+            let x = if k % 2 == 0 { a } else { -a };
+            rf.push(x, &mut |_| n += 1).unwrap();
+        }
+        assert!(rf.overflows() > u64::from(u32::MAX), "{}", rf.overflows());
     }
 }

@@ -19,7 +19,7 @@ pub mod sim;
 use crate::full::{FullSolver, SceneKind};
 use crate::scene::Precision;
 use absorber_core::{NewtonKind, Params};
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -513,9 +513,7 @@ pub fn cached_full(
         }
     }
     let t = run_full(cfg, scene, duration)?;
-    std::fs::create_dir_all(cache).with_context(|| format!("create {}", cache.display()))?;
-    std::fs::write(&path, serde_json::to_string(&t)?)
-        .with_context(|| format!("write {}", path.display()))?;
+    crate::output::atomic_write(&path, serde_json::to_string(&t)?.as_bytes())?;
     Ok(t)
 }
 

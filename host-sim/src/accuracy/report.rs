@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::plot::{render, Panel, Series};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -337,9 +337,10 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         rcfg,
         runs,
     };
-    std::fs::create_dir_all(out.join("img"))?;
+    std::fs::create_dir_all(out.join("img"))
+        .with_context(|| format!("cannot create `{}`", out.join("img").display()))?;
     let md = ctx.write(&out, a.quick, started)?;
-    std::fs::write(out.join("accuracy.md"), md)?;
+    crate::output::atomic_write(&out.join("accuracy.md"), md.as_bytes())?;
     eprintln!(
         "accuracy: wrote {} ({:.0} s)",
         out.join("accuracy.md").display(),
@@ -768,10 +769,15 @@ impl Ctx {
     }
 
     fn plot_pareto(&self, out: &Path, pts: &[(f64, f64)], front: &[bool]) -> Result<()> {
+        crate::output::atomic_with(&out.join("img/accuracy_pareto.png"), |p| {
+            self.plot_pareto_at(p, pts, front)
+        })
+    }
+
+    fn plot_pareto_at(&self, path: &Path, pts: &[(f64, f64)], front: &[bool]) -> Result<()> {
         use plotters::prelude::*;
         use plotters::style::{register_font, FontStyle};
         let _ = register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
-        let path = out.join("img/accuracy_pareto.png");
         let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("plot {}: {e}", path.display());
         let fin: Vec<(f64, f64, usize)> = pts
             .iter()
@@ -785,7 +791,7 @@ impl Ctx {
         let (y0, y1) = fin.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
             (a.min(p.1), b.max(p.1))
         });
-        let root = BitMapBackend::new(&path, (1300, 850)).into_drawing_area();
+        let root = BitMapBackend::new(path, (1300, 850)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(

@@ -497,29 +497,31 @@ fn boxed<T: Real + 'static, S: Scene + 'static, const N: usize, const D: usize>(
 }
 
 macro_rules! by_elements {
-    ($t:ty, $s:ty, $x:literal, $n:expr, $p:expr, $a:expr) => {
-        match $n {
-            1 => boxed::<$t, $s, 1, { 4 + $x }>($p, $a),
-            2 => boxed::<$t, $s, 2, { 8 + $x }>($p, $a),
-            3 => boxed::<$t, $s, 3, { 12 + $x }>($p, $a),
-            16 => boxed::<$t, $s, 16, { 64 + $x }>($p, $a),
-            64 => boxed::<$t, $s, 64, { 256 + $x }>($p, $a),
-            _ => Err(Error::InvalidParameter {
+    ($t:ty, $s:ty, $x:tt, $n:expr, $p:expr, $a:expr) => {
+        $crate::with_elements!(
+            $n,
+            [1, 2, 3, 16, 64],
+            $x,
+            boxed[$t, $s]($p, $a),
+            Err(Error::InvalidParameter {
                 field: "elements",
                 reason: "stability cases: 1, 2, 3, 16, 64",
-            }),
-        }
+            })
+        )
     };
 }
 
 fn locked<T: Real + 'static>(n: usize, p: Params<T>, a0: T) -> Result<Box<dyn Probe>, Error> {
-    match n {
-        3 => boxed::<T, LockedBall, 3, 12>(p, a0),
-        _ => Err(Error::InvalidParameter {
+    crate::with_elements!(
+        n,
+        [3],
+        0,
+        boxed[T, LockedBall](p, a0),
+        Err(Error::InvalidParameter {
             field: "elements",
             reason: "locked stability cases: 3",
-        }),
-    }
+        })
+    )
 }
 
 /// Builds the probe of a case at rest with input `a0` at t = 0.
@@ -1288,7 +1290,8 @@ pub struct StabilityArgs {
     /// Short runs only (the subset of `cargo test`), no long runs, no drift study.
     #[arg(long)]
     pub quick: bool,
-    /// Only cases whose group or name contains this text.
+    /// Only cases whose group or name contains this text. A subset never replaces
+    /// docs/stability.md: give `--out` another file.
     #[arg(long)]
     pub only: Option<String>,
     /// Length of the drift study \[s\] (f32 beside f64 at 3.70 Hz).
@@ -1338,6 +1341,8 @@ pub fn command(args: &StabilityArgs) -> anyhow::Result<()> {
     } else {
         Length::Full
     };
+    // The document's directory: writable and ours before hours of computation.
+    let (mut out_dir, out_name) = crate::output::OutputDir::for_file(&args.out, "stability")?;
     let mut cases = matrix(length);
     if let Some(only) = &args.only {
         cases.retain(|c| c.group.contains(only.as_str()) || c.name.contains(only.as_str()));
@@ -1389,12 +1394,8 @@ pub fn command(args: &StabilityArgs) -> anyhow::Result<()> {
         args,
         t0.elapsed().as_secs_f64(),
     );
-    if let Some(dir) = args.out.parent() {
-        if !dir.as_os_str().is_empty() {
-            std::fs::create_dir_all(dir)?;
-        }
-    }
-    std::fs::write(&args.out, md)?;
+    out_dir.write(&out_name, &md)?;
+    out_dir.commit(crate::output::Status::Complete, serde_json::Value::Null)?;
     let known = results
         .iter()
         .filter(|(c, o)| !o.passes(&c.expect) && c.known_issue.is_some())

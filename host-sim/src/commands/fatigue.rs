@@ -1,0 +1,234 @@
+//! `fatigue`: damage rate at the clamp vs frequency, free vs locked ball.
+
+use super::{check_excitations, load, pool};
+use crate::cli::{FatigueArgs, Moment};
+use crate::fatigue::{csv, fatigue_points, FatiguePoint};
+use crate::output::{command_line, with_output, OutputDir, PointsFailed, Status};
+use crate::plot::{render, Panel, Series};
+use crate::sweep::PAPER_FREQUENCIES;
+use absorber_core::monitor::{MomentEstimate, MonitorConfig, ThresholdRule};
+use anyhow::Result;
+use serde_json::json;
+
+/// Palette index of the free ball and of the locked ball (the same on both panels).
+const FREE: usize = 0;
+const LOCKED: usize = 1;
+
+pub fn run(a: &FatigueArgs) -> Result<()> {
+    let mut s = load(&a.scene)?;
+    if a.scene.duration.is_none() && a.scene.scene == "paper" {
+        s.file.duration = 60.0;
+    }
+    let params = s.params()?;
+    let freqs = a
+        .freqs
+        .clone()
+        .unwrap_or_else(|| PAPER_FREQUENCIES.to_vec());
+    let amps = a
+        .amplitudes
+        .clone()
+        .unwrap_or_else(|| vec![s.file.excitation.amplitude_or_paper()]);
+    check_excitations(
+        &freqs,
+        &amps,
+        s.file.integrator.step,
+        "--freqs",
+        "--amplitudes",
+    )?;
+    if amps.iter().any(|&x| x <= 0.0) {
+        anyhow::bail!("invalid value for `--amplitudes`: must be positive");
+    }
+    if s.file.elements != 3 && s.file.elements != 8 {
+        anyhow::bail!(
+            "invalid value for `elements`: {} (fatigue supports 3 or 8)",
+            s.file.elements
+        );
+    }
+    let detail = a.category.detail();
+    let config = MonitorConfig {
+        moment: match a.moment {
+            Moment::Reaction => MomentEstimate::Reaction,
+            Moment::Curvature => MomentEstimate::Curvature,
+        },
+        curve: detail.curve(ThresholdRule::Cutoff),
+        ..MonitorConfig::paper(&params)?
+    };
+    let pool = pool(a.jobs)?;
+    let dir = a
+        .out
+        .clone()
+        .unwrap_or_else(|| s.file.outputs.directory.clone());
+    let out = OutputDir::open(&dir, Some("fatigue"), &command_line())?;
+    let t0 = std::time::Instant::now();
+    let moment = format!("{:?}", a.moment).to_lowercase();
+    eprintln!(
+        "fatigue: {} runs of {} s on {} threads…",
+        2 * freqs.len() * amps.len(),
+        s.file.duration,
+        pool.current_num_threads()
+    );
+    let ((points, csv_path, png), _files) = with_output(out, |out| {
+        let points = pool.install(|| {
+            fatigue_points(
+                &params,
+                s.file.elements,
+                config,
+                &freqs,
+                &amps,
+                s.file.duration,
+            )
+        })?;
+        let csv_path = out.write("fatigue.csv", &csv(&points, detail.name(), &moment))?;
+        let png = if a.no_plots {
+            None
+        } else {
+            let title = format!(
+                "Root fatigue, AASHTO {} ({} s runs, {} elements, base ±{:.2} mm)",
+                detail.name(),
+                s.file.duration,
+                s.file.elements,
+                amps.first().copied().unwrap_or(0.0) * 1e3
+            );
+            Some(out.write_with("fatigue.png", |p| plot(p, &title, &points, &amps))?)
+        };
+        let failed = points.iter().filter(|p| p.failed()).count();
+        let status = if failed > 0 {
+            Status::PointsFailed
+        } else {
+            Status::Complete
+        };
+        let extra = json!({ "points": points.len(), "failed": failed });
+        Ok(((points, csv_path, png), status, extra))
+    })?;
+    let wall = t0.elapsed().as_secs_f64();
+    println!(
+        "fatigue at the clamp: category {} (m = 3, CAFT cutoff), {} elements, {} s runs, moment from the {moment}",
+        detail.name(),
+        s.file.elements,
+        s.file.duration
+    );
+    println!("  f [Hz]  A [mm]   D/h free     D/h locked   S_eq free/locked [MPa]   impacts");
+    for p in &points {
+        if p.failed() {
+            let why = [("free", &p.free.error), ("locked", &p.locked.error)]
+                .iter()
+                .filter_map(|(w, e)| e.as_deref().map(|e| format!("{w} ball: {e}")))
+                .collect::<Vec<_>>()
+                .join("; ");
+            println!(
+                "  {:6.3}  {:6.3}   FAILED: {why}",
+                p.frequency,
+                p.amplitude * 1e3
+            );
+            continue;
+        }
+        println!(
+            "  {:6.3}  {:6.3}   {:10.3e}   {:10.3e}   {:8.2} / {:8.2}       {:5}",
+            p.frequency,
+            p.amplitude * 1e3,
+            p.free.damage_rate,
+            p.locked.damage_rate,
+            p.free.equivalent_range / 1e6,
+            p.locked.equivalent_range / 1e6,
+            p.free.impacts,
+        );
+    }
+    println!("wrote {}", csv_path.display());
+    if let Some(p) = &png {
+        println!("wrote {}", p.display());
+    }
+    println!("wall time {wall:.2} s ({} runs)", 2 * points.len());
+    let failed = points.iter().filter(|p| p.failed()).count();
+    if failed > 0 {
+        return Err(PointsFailed(format!(
+            "{failed} of {} fatigue points failed (marked FAILED in the table, {} and the plot)",
+            points.len(),
+            csv_path.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+fn plot(path: &std::path::Path, title: &str, points: &[FatiguePoint], amps: &[f64]) -> Result<()> {
+    let log = |x: f64| if x > 0.0 { x.log10() } else { f64::NAN };
+    let mut damage = Vec::new();
+    let mut seq = Vec::new();
+    for (k, &amp) in amps.iter().enumerate() {
+        let pts: Vec<&FatiguePoint> = points
+            .iter()
+            .filter(|p| p.amplitude == amp && !p.failed())
+            .collect();
+        let tag = if amps.len() > 1 {
+            format!(" {:.2} mm", amp * 1e3)
+        } else {
+            String::new()
+        };
+        // One colour per scene (free, locked) and amplitude, the same on both panels.
+        let (cf, cl) = (FREE + 2 * k, LOCKED + 2 * k);
+        damage.push(
+            Series::marked(
+                &format!("free ball{tag}"),
+                pts.iter()
+                    .map(|p| (p.frequency, log(p.free.damage_rate)))
+                    .collect(),
+            )
+            .colored(cf),
+        );
+        damage.push(
+            Series::marked(
+                &format!("locked ball{tag}"),
+                pts.iter()
+                    .map(|p| (p.frequency, log(p.locked.damage_rate)))
+                    .collect(),
+            )
+            .colored(cl),
+        );
+        seq.push(
+            Series::marked(
+                &format!("free ball{tag}"),
+                pts.iter()
+                    .map(|p| (p.frequency, p.free.equivalent_range / 1e6))
+                    .collect(),
+            )
+            .colored(cf),
+        );
+        seq.push(
+            Series::marked(
+                &format!("locked ball{tag}"),
+                pts.iter()
+                    .map(|p| (p.frequency, p.locked.equivalent_range / 1e6))
+                    .collect(),
+            )
+            .colored(cl),
+        );
+    }
+    let failed: Vec<f64> = points
+        .iter()
+        .filter(|p| p.failed())
+        .map(|p| p.frequency)
+        .collect();
+    render(
+        path,
+        title,
+        &[
+            Panel::new(
+                "Miner damage rate (CAFT cutoff)",
+                "excitation frequency [Hz]",
+                "log10(damage per hour)",
+                damage,
+            )
+            .with_failed(failed.clone()),
+            Panel::new(
+                "Equivalent stress range S_eq = (Σ n S³ / Σ n)^(1/3)",
+                "excitation frequency [Hz]",
+                "S_eq [MPa]",
+                seq,
+            )
+            .with_failed(failed),
+        ],
+        2,
+        1,
+        (1000, 900),
+    )
+}

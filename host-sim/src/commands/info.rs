@@ -1,0 +1,115 @@
+//! `static`, `modes`, `tune`: the linearized model, printed.
+
+use super::{describe, load};
+use crate::cli::{InfoArgs, ModesArgs, TuneArgs};
+use crate::output::{OutputDir, Status};
+use crate::tune::tune;
+use anyhow::{bail, Result};
+use serde_json::json;
+
+pub fn static_cmd(a: &InfoArgs) -> Result<()> {
+    let s = load(&a.scene)?;
+    let sim = crate::run::build_simulator(&s, 0.0)?;
+    let d = sim.static_tip_deflection();
+    if a.json {
+        println!(
+            "{}",
+            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "static_tip_deflection": d })
+        );
+    } else {
+        println!("{}", describe(&s));
+        println!("static tip deflection: {d:.6e} m ({:.3} mm)", d * 1e3);
+    }
+    Ok(())
+}
+
+pub fn modes(a: &ModesArgs) -> Result<()> {
+    let s = load(&a.scene)?;
+    let sim = crate::run::build_simulator(&s, 0.0)?;
+    let f = sim
+        .natural_frequencies()
+        .map_err(|e| crate::scene::map_core_error(e, &s))?;
+    let f: Vec<f64> = f.into_iter().take(a.count).collect();
+    if a.json {
+        println!(
+            "{}",
+            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "frequencies": f })
+        );
+    } else {
+        println!("{}", describe(&s));
+        for (i, x) in f.iter().enumerate() {
+            println!("mode {}: {x:.4} Hz", i + 1);
+        }
+        if s.file.kind.free_ball() {
+            let p = s.params()?;
+            println!(
+                "(ball on a fixed housing: {:.4} Hz)",
+                p.ball.fixed_housing_frequency(p.gravity)
+            );
+        }
+    }
+    Ok(())
+}
+
+pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
+    let s = load(&a.scene)?;
+    if !a.ratio.is_finite() || a.ratio <= 0.0 {
+        bail!(
+            "invalid value for `--ratio`: {} (must be finite and positive)",
+            a.ratio
+        );
+    }
+    // The output directory is checked (and locked) before the computation.
+    let out = match &a.write {
+        Some(path) => {
+            let name = path
+                .file_name()
+                .map(|n| n.to_string_lossy().to_string())
+                .unwrap_or_default();
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                _ => std::path::PathBuf::from("."),
+            };
+            Some((OutputDir::open(&dir, None, "tune")?, name))
+        }
+        None => None,
+    };
+    let t = tune(&s, a.ratio)?;
+    if let Some((mut dir, name)) = out {
+        let mut tuned = s.clone();
+        tuned.file.name = "tuned".into();
+        tuned.file.ball.track_radius = (t.track_radius * 1e9).round() / 1e9;
+        let text = format!(
+            "# Paper scene with the track radius tuned by `host-sim tune` so that the ball's frequency is\n\
+             # {} x the beam's first frequency in the coupled linearized model ({:.4} Hz / {:.4} Hz).\n{}",
+            a.ratio,
+            t.ball_frequency,
+            t.beam_frequency,
+            tuned.to_toml()?
+        );
+        dir.write(&name, &text)?;
+        dir.commit(Status::Complete, serde_json::Value::Null)?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string(&t)?);
+    } else {
+        println!("{}", describe(&s));
+        println!(
+            "tuned track radius R       {:.6} mm (ρ = R − r_b = {:.6} mm)",
+            t.track_radius * 1e3,
+            t.path_radius * 1e3
+        );
+        println!(
+            "coupled model              ball {:.4} Hz, beam {:.4} Hz, ratio {:.6}",
+            t.ball_frequency, t.beam_frequency, t.ratio
+        );
+        println!(
+            "ball on a fixed housing    {:.4} Hz;  locked-ball first frequency {:.4} Hz",
+            t.fixed_housing_frequency, t.locked_frequency
+        );
+        if let Some(p) = &a.write {
+            println!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}

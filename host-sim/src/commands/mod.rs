@@ -1,0 +1,128 @@
+//! What each command does. The options are in [`crate::cli`]; the computations in the library
+//! modules (`run`, `sweep`, `fatigue`, `tune`, and the studies `stability`, `accuracy`,
+//! `validation`); every file goes through [`crate::output`].
+
+mod docs;
+mod fatigue;
+mod info;
+mod run;
+mod sweep;
+
+use crate::cli::{Cli, Command, PaperArgs, SceneArgs};
+use crate::scene::{ExcitationType, Precision, Scene};
+use anyhow::Result;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::Path;
+
+/// Runs the parsed command line.
+pub fn dispatch(cli: Cli) -> Result<()> {
+    match cli.command.unwrap_or(Command::Paper(PaperArgs {
+        scene: SceneArgs {
+            scene: "paper".into(),
+            ..Default::default()
+        },
+        json: false,
+    })) {
+        Command::Paper(a) => run::paper(&a),
+        Command::Static(a) => info::static_cmd(&a),
+        Command::Modes(a) => info::modes(&a),
+        Command::Run(a) => run::run(&a),
+        Command::Sweep(a) => sweep::sweep_cmd(&a),
+        Command::Tune(a) => info::tune_cmd(&a),
+        Command::Stability(a) => docs::stability(&a),
+        Command::Fatigue(a) => fatigue::run(&a),
+        Command::Accuracy(a) => docs::accuracy(&a),
+        Command::Validation(a) => docs::validation(&a),
+    }
+}
+
+/// Loads the scene of the options and prints its warnings.
+fn load(a: &SceneArgs) -> Result<Scene> {
+    let s = a.load()?;
+    for w in s.warnings() {
+        eprintln!("{w}");
+    }
+    Ok(s)
+}
+
+/// One line describing a scene.
+pub fn describe(s: &Scene) -> String {
+    let f = &s.file;
+    let exc = match f.excitation.kind {
+        ExcitationType::Harmonic => format!(
+            "base {:.3} mm at {} Hz",
+            f.excitation.amplitude_or_paper() * 1e3,
+            f.excitation.frequency_or_paper()
+        ),
+        ExcitationType::Csv => format!(
+            "base acceleration from {}",
+            f.excitation
+                .file
+                .as_deref()
+                .map(Path::display)
+                .map(|d| d.to_string())
+                .unwrap_or_default()
+        ),
+    };
+    format!(
+        "scene {}: {}, {} elements, {}, {} solver; {}; {} s with h = {} s",
+        f.name,
+        f.kind.name(),
+        f.elements,
+        match f.precision {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+        },
+        f.solver.name(),
+        exc,
+        f.duration,
+        f.integrator.step
+    )
+}
+
+fn progress_bar(total: u64, what: &str) -> ProgressBar {
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    pb.set_message(what.to_string());
+    pb
+}
+
+/// Worker pool of `jobs` threads (default: all cores) with big stacks for large models.
+fn pool(jobs: Option<usize>) -> Result<rayon::ThreadPool> {
+    let mut pool = rayon::ThreadPoolBuilder::new().stack_size(64 << 20);
+    if let Some(j) = jobs {
+        if j == 0 {
+            anyhow::bail!("invalid value for `--jobs`: 0 (must be at least 1)");
+        }
+        pool = pool.num_threads(j);
+    }
+    Ok(pool.build()?)
+}
+
+/// Checks excitation frequencies and amplitudes given on the command line against the step
+/// (Nyquist, peak acceleration); warns when a period is poorly resolved.
+fn check_excitations(freqs: &[f64], amps: &[f64], h: f64, fkey: &str, akey: &str) -> Result<()> {
+    for &f in freqs {
+        if !f.is_finite() || f <= 0.0 {
+            anyhow::bail!("invalid value for `{fkey}`: {f} (must be finite and positive)");
+        }
+    }
+    for &a in amps {
+        if !a.is_finite() || a < 0.0 {
+            anyhow::bail!("invalid value for `{akey}`: {a} (must be finite and not negative)");
+        }
+    }
+    for &f in freqs {
+        for &a in amps {
+            crate::scene::check_harmonic(a, f, h, akey, fkey)?;
+        }
+        if let Some(w) = crate::scene::harmonic_warning(f, h, fkey) {
+            eprintln!("{w}");
+        }
+    }
+    Ok(())
+}
