@@ -138,32 +138,40 @@ fn garbage_after_good_samples_is_a_clear_error() {
 /// step converged and no step near the iteration budget.
 #[test]
 fn violent_steps_converge_in_both_precisions() {
-    fn run<T: absorber_core::Real>(p: absorber_core::Params<T>) -> (u32, u32) {
+    fn run<T: absorber_core::Real>(p: absorber_core::Params<T>) -> (u32, u32, f64) {
         let (amp, f, h) = (50e-3, 4.13, 3e-3);
         let w = 2.0 * std::f64::consts::PI * f;
         let u = |k: usize| nalgebra::convert::<f64, T>(-amp * w * w * (w * k as f64 * h).sin());
         let mut m = absorber_core::FreeBallModel::<T, 3, 13>::at_rest(p, u(0)).expect("start");
-        let (mut worst, mut impacts) = (0, 0);
+        let (mut worst, mut impacts, mut total) = (0, 0, 0u64);
         for k in 1..=(20.0 / h) as usize {
             let r = m
                 .step(u(k))
                 .unwrap_or_else(|e| panic!("step {k} (t = {:.3} s): {e}", k as f64 * h));
             worst = worst.max(r.iterations);
+            total += u64::from(r.iterations);
             impacts += u32::from(r.impact.is_some());
         }
-        (worst, impacts)
+        (worst, impacts, total as f64 / (20.0 / h))
     }
     let p = absorber_core::Params::<f64>::default();
-    let (w64, i64_) = run(p);
-    let (w32, i32_) = run(host_sim::core_sim::params_f32(&p));
+    let (w64, i64_, m64) = run(p);
+    let (w32, i32_, m32) = run(host_sim::core_sim::params_f32(&p));
     println!(
-        "50 mm, 4.13 Hz, 20 s: f64 max {w64} iterations/step, {i64_} impacts; f32 {w32}, {i32_}"
+        "50 mm, 4.13 Hz, 20 s: f64 max {w64} iterations/step (mean {m64:.2}), {i64_} impacts; f32 {w32} ({m32:.2}), {i32_}"
     );
     assert!(
         i64_ > 300 && i32_ > 300,
         "the ball hits the stops every cycle"
     );
-    assert!(w64 < 100 && w32 < 100, "{w64} {w32}");
+    // An impact step sums the iterations of its (up to five) solves, each with its own fresh
+    // matrix; every solve stayed within its budget of 100 (else the step would have failed).
+    // Per-step Newton (default) needs more, cheaper iterations than full Newton in this violent
+    // case: measured 8.3 (f64) / 7.5 (f32) a step on average, at most 70 / 109, against full
+    // Newton's 4.8 and 50 — most of them reuse the step's matrix (a residual and a
+    // back-substitution). Bounds: 10 on average, 150 in the worst step.
+    assert!(w64 < 150 && w32 < 150, "{w64} {w32}");
+    assert!(m64 < 10.0 && m32 < 10.0, "{m64} {m32}");
 }
 
 /// Modified Newton at h = 5 ms (damping-matched γ = 0.62, locked ball, N = 4, 4.13 Hz): it

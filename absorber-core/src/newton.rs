@@ -40,7 +40,8 @@ pub const MAX_STEP: f64 = 0.05;
 pub const DAMPING_TRIALS: u32 = 12;
 
 /// A reused matrix's iteration is converged when its estimated remaining error
-/// `θ/(1−θ)‖dx‖` is below `SETTLE · tolerance` (and `‖dx‖` below the tolerance).
+/// `θ/(1−θ)‖dx‖` is below `SETTLE · tolerance` (but not below `8ε`, the rounding floor of the
+/// scalar), and `‖dx‖` below the tolerance.
 pub const SETTLE: f64 = 1e-4;
 
 /// A reused matrix whose correction contracted by less than this factor is refreshed at the
@@ -307,7 +308,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             // close to the exact discrete one as full Newton's.
             let settled = !reuse || it == 1 || {
                 let theta = norm / previous;
-                theta * norm <= (T::one() - theta) * tol * self.settle
+                theta * norm <= (T::one() - theta) * self.settle
             };
             if norm <= tol && settled {
                 return Ok(Solved {

@@ -32,7 +32,9 @@ pub struct System<T, S, const N: usize, const D: usize> {
     /// [`PIVOT_RATIO`] and [`MAX_STEP`] in the scalar (converted once, not per step).
     pub(crate) pivot_ratio: T,
     pub(crate) max_step: T,
-    /// [`crate::newton::SETTLE`] in the scalar.
+    /// What a reused matrix's estimated remaining error must be below:
+    /// `max(SETTLE · tolerance, 8ε)` ([`crate::newton::SETTLE`]; not below the rounding floor
+    /// of the precision, which `f32` reaches first: 9.5e-7).
     pub(crate) settle: T,
     /// [`crate::newton::SLOW`] in the scalar.
     pub(crate) slow: T,
@@ -107,7 +109,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             scale,
             pivot_ratio: lit(PIVOT_RATIO),
             max_step: lit(MAX_STEP),
-            settle: lit(crate::newton::SETTLE),
+            settle: {
+                let want = lit::<T>(crate::newton::SETTLE) * params.integrator.tolerance;
+                let floor = T::default_epsilon() * lit(8.0);
+                if want > floor {
+                    want
+                } else {
+                    floor
+                }
+            },
             slow: lit(crate::newton::SLOW),
             _scene: PhantomData,
         }
