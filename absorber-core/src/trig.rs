@@ -15,6 +15,9 @@
 //! Only `+ − ×` and one conversion to an integer: correctly rounded IEEE-754 single operations,
 //! so the host and the Cortex-M4F give the same bits.
 
+// The constants are written as published (Cephes); each rounds to the f32 it names.
+#![allow(clippy::excessive_precision)]
+
 /// Largest |x| reduced here; beyond it `libm::sincosf` is called.
 pub const FAST_LIMIT: f32 = 8192.0;
 

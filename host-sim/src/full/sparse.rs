@@ -284,7 +284,7 @@ mod tests {
             if !(banded || bordered) {
                 return None;
             }
-            Some(if i == j && i % 4 == 0 {
+            Some(if i == j && i.is_multiple_of(4) {
                 0.0
             } else {
                 ((i * 7 + j * 3) as f64).sin() + 0.1
