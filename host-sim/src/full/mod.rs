@@ -155,7 +155,7 @@ struct Work {
 }
 
 use absorber_core::model::{DAMPING_TRIALS, END_BEYOND_STOP, MAX_STEP, START_BEYOND_STOP};
-use absorber_core::newton::SETTLE;
+use absorber_core::newton::{SETTLE, SLOW};
 use absorber_core::NewtonKind;
 
 /// Column order of the sparse factorizations (docs/full-solver.md compares the two).
@@ -919,6 +919,11 @@ impl FullSolver {
                 refresh = true;
                 continue;
             }
+            // Taken; a slowly contracting kept matrix is rebuilt at the next iteration (the
+            // core's `SLOW`).
+            if !fresh && increment > SLOW * previous {
+                refresh = true;
+            }
             // The core's damping (`Model::damping`): natural monotonicity test with the same
             // factors, λ = 1, ½, … down to the trust-region cap MAX_STEP/‖dx‖.
             let mut lambda = 1.0;
@@ -959,7 +964,7 @@ impl FullSolver {
             // below SETTLE·tol too (absorber_core::newton).
             let settled = fresh || it == 1 || {
                 let theta = increment / previous;
-                theta * increment <= (1.0 - theta) * tol * SETTLE
+                theta * increment <= (1.0 - theta) * (tol * SETTLE).max(8.0 * f64::EPSILON)
             };
             if increment <= tol && settled {
                 return Ok(Solved {
