@@ -227,15 +227,6 @@ fn dot<T: Real, const W: usize>(a: &[T; W], b: &[T; W]) -> T {
     s
 }
 
-/// How a factored matrix was factored (what [`solve`] must undo).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Pivoting<const D: usize> {
-    /// Banded, no row exchanges.
-    None,
-    /// Dense, partial pivoting: `pivots[k]` is the row swapped with row `k` at step `k`.
-    Rows([usize; D]),
-}
-
 /// Factors `a` in place with partial pivoting over the full matrix, `P a = L U`; `None` if it
 /// is singular (a zero pivot) or not finite.
 pub fn factor_pivoted<T: Real, const D: usize>(a: &mut SMatrix<T, D, D>) -> Option<[usize; D]> {
@@ -285,39 +276,31 @@ pub fn factor_pivoted<T: Real, const D: usize>(a: &mut SMatrix<T, D, D>) -> Opti
     Some(pivots)
 }
 
-/// Solves `A x = b` in place (`b` becomes `x`) from dense factors ([`factor_pivoted`], or
-/// unpivoted dense factors restricted to the band with [`Pivoting::None`]); `false` if the
-/// result is not finite.
+/// Solves `A x = b` in place (`b` becomes `x`) from [`factor_pivoted`]'s factors and row
+/// exchanges; `false` if the result is not finite.
 pub fn solve<T: Real, const D: usize>(
     lu: &SMatrix<T, D, D>,
-    pivoting: &Pivoting<D>,
+    pivots: &[usize; D],
     b: &mut SVector<T, D>,
 ) -> bool {
-    let band = match pivoting {
-        Pivoting::None => BAND,
-        Pivoting::Rows(pivots) => {
-            for (k, p) in pivots.iter().enumerate() {
-                if *p != k {
-                    let _ = b
-                        .as_mut_slice()
-                        .get_disjoint_mut([*p, k])
-                        .map(|[x, y]| core::mem::swap(x, y));
-                }
-            }
-            D
+    for (k, p) in pivots.iter().enumerate() {
+        if *p != k {
+            let _ = b
+                .as_mut_slice()
+                .get_disjoint_mut([*p, k])
+                .map(|[x, y]| core::mem::swap(x, y));
         }
-    };
+    }
     let x = b.as_mut_slice();
     // Forward: L y = b, column by column.
     for (k, col) in lu.as_slice().chunks_exact(D).enumerate() {
-        let end = (k + band + 1).min(D);
         let Some(xk) = x.get(k).copied() else {
             return false;
         };
         if xk == T::zero() {
             continue;
         }
-        if let (Some(l), Some(dst)) = (col.get(k + 1..end), x.get_mut(k + 1..end)) {
+        if let (Some(l), Some(dst)) = (col.get(k + 1..), x.get_mut(k + 1..)) {
             for (d, lik) in dst.iter_mut().zip(l.iter()) {
                 *d -= *lik * xk;
             }
@@ -325,13 +308,12 @@ pub fn solve<T: Real, const D: usize>(
     }
     // Backward: U x = y, column by column from the last.
     for (k, col) in lu.as_slice().chunks_exact(D).enumerate().rev() {
-        let start = k.saturating_sub(band);
         let (Some(ukk), Some(xk)) = (col.get(k), x.get_mut(k)) else {
             return false;
         };
         *xk /= *ukk;
         let xk = *xk;
-        if let (Some(u), Some(dst)) = (col.get(start..k), x.get_mut(start..k)) {
+        if let (Some(u), Some(dst)) = (col.get(..k), x.get_mut(..k)) {
             for (d, uik) in dst.iter_mut().zip(u.iter()) {
                 *d -= *uik * xk;
             }
@@ -346,7 +328,7 @@ pub fn solve_dense<T: Real, const D: usize>(
     mut b: SVector<T, D>,
 ) -> Option<SVector<T, D>> {
     let pivots = factor_pivoted(&mut a)?;
-    solve(&a, &Pivoting::Rows(pivots), &mut b).then_some(b)
+    solve(&a, &pivots, &mut b).then_some(b)
 }
 
 #[cfg(test)]

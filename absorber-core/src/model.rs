@@ -14,8 +14,8 @@ use crate::params::Params;
 use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
 use crate::system::System;
-use crate::tip::{Chain, LocalState};
-use nalgebra::{SMatrix, SVector};
+use crate::tip::LocalState;
+use nalgebra::SVector;
 
 pub use crate::newton::{DAMPING_TRIALS, MAX_STEP};
 
@@ -186,21 +186,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         System::<T, S, N, D>::local(q, v, a)
     }
 
-    /// Residual, Newton matrix along `ch` and contact force by value (modes, tests).
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn assemble(
-        &self,
-        q: &SVector<T, D>,
-        v: &SVector<T, D>,
-        a: &SVector<T, D>,
-        g_eff: T,
-        ch: &Chain<T>,
-        contact: Contact,
-        plumb: bool,
-    ) -> (SVector<T, D>, SMatrix<T, D, D>, T) {
-        self.sys.assemble(q, v, a, g_eff, ch, contact, plumb)
-    }
-
     /// Static equilibrium under gravity (zero base acceleration), a free ball hanging plumb
     /// below the beam end, by load stepping (see `statics`). Returns the Newton iterations
     /// used. Sets the state to the equilibrium, at rest, and remembers it as the reference of
@@ -325,7 +310,7 @@ mod tests {
     use super::*;
     use crate::params::ImpactModel;
     use crate::scene::{FreeBall, LockedBall};
-    use crate::tip;
+    use crate::tip::{self, Chain};
 
     /// The assembled Newton matrix is the exact derivative of the residual along the Newmark
     /// chain (central differences, relative 1e-6), at a deformed, fast-moving state, for every
@@ -350,7 +335,7 @@ mod tests {
             c_v: 0.7 * 3e-3,
             c_m: 1.0,
         };
-        let (r0, jac, f0) = m.assemble(&q, &v, &a, 9.0, &ch, contact, false);
+        let (r0, jac, f0) = m.sys.assemble(&q, &v, &a, 9.0, &ch, contact, false);
         // The residual alone (reused-matrix iterations) is the same residual.
         let mut r1 = SVector::<f64, D>::zeros();
         let f1 = m.sys.residual([&q, &v, &a], 9.0, contact, false, &mut r1);
@@ -361,6 +346,7 @@ mod tests {
             let mut e = SVector::<f64, D>::zeros();
             e[j] = h;
             let rp = m
+                .sys
                 .assemble(
                     &(q + e * ch.c_q),
                     &(v + e * ch.c_v),
@@ -372,6 +358,7 @@ mod tests {
                 )
                 .0;
             let rm = m
+                .sys
                 .assemble(
                     &(q - e * ch.c_q),
                     &(v - e * ch.c_v),

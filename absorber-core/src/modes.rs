@@ -73,7 +73,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let z = SVector::<T, D>::zeros();
         let g = self.sys.params.gravity;
         let zero = T::zero();
-        let (_, m, _) = self.assemble(
+        let (_, m, _) = self.sys.assemble(
             &self.sys.equilibrium,
             &z,
             &z,
@@ -86,7 +86,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             Contact::Off,
             false,
         );
-        let (_, k, _) = self.assemble(
+        let (_, k, _) = self.sys.assemble(
             &self.sys.equilibrium,
             &z,
             &z,

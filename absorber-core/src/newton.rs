@@ -21,7 +21,7 @@
 //! had never been offered.
 
 use crate::error::Error;
-use crate::linalg::{self, BandMatrix, Pivoting};
+use crate::linalg::{self, BandMatrix};
 use crate::model::Contact;
 use crate::params::NewtonKind;
 use crate::scalar::{is_positive, lit, to_f64, Real};
@@ -160,7 +160,7 @@ impl<T: Real, const D: usize> Workspace<T, D> {
             .ok_or(Error::Singular)?;
         let ok = match &f.pivots {
             None => f.band.solve(b),
-            Some(p) => linalg::solve(&f.dense, &Pivoting::Rows(*p), b),
+            Some(p) => linalg::solve(&f.dense, p, b),
         };
         if f.key.is_some() && ok {
             Ok(())
@@ -210,10 +210,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             r,
             &mut slot.band,
         );
-        slot.pivots = if !ws.pivot && slot.band.factor(self.pivot_ratio) {
+        slot.pivots = if ws.pivot {
+            self.pivot_fallback(p, qva, r, slot, false)?
+        } else if slot.band.factor(self.pivot_ratio) {
             None
         } else {
-            self.pivot_fallback(p, qva, r, slot)?
+            self.pivot_fallback(p, qva, r, slot, true)?
         };
         slot.key = Some(Key {
             c_q: p.ch.c_q,
@@ -222,9 +224,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         Ok(())
     }
 
-    /// Rare: a band pivot was too small. Rebuild the matrix (the elimination destroyed it) and
-    /// factor it dense with partial pivoting. Not inlined: it keeps the dense matrix's code
-    /// and frame off the ordinary path.
+    /// Factors the assembled matrix dense with partial pivoting: off the step path, or (rare)
+    /// when a band pivot was too small — then the elimination destroyed the band and it is
+    /// assembled again (`rebuild`). Not inlined: it keeps the dense matrix's code and frame off
+    /// the ordinary path.
     #[inline(never)]
     #[cold]
     fn pivot_fallback(
@@ -233,17 +236,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         qva: &[SVector<T, D>; 3],
         r: &mut SVector<T, D>,
         slot: &mut Factors<T, D>,
+        rebuild: bool,
     ) -> Result<Option<[usize; D]>, Error> {
-        let [q, v, a] = qva;
-        self.residual_and_jacobian(
-            [q, v, a],
-            p.g_eff,
-            &p.ch,
-            p.contact,
-            p.plumb,
-            r,
-            &mut slot.band,
-        );
+        if rebuild {
+            let [q, v, a] = qva;
+            self.residual_and_jacobian(
+                [q, v, a],
+                p.g_eff,
+                &p.ch,
+                p.contact,
+                p.plumb,
+                r,
+                &mut slot.band,
+            );
+        }
         slot.dense = slot.band.to_dense();
         linalg::factor_pivoted(&mut slot.dense)
             .map(Some)
