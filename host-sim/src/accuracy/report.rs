@@ -247,6 +247,9 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         cache.display(),
         out.display()
     );
+    // The report directory writable and ours (one command at a time) before any computation;
+    // the files themselves are written atomically.
+    let _lock = crate::output::OutputDir::open(&out, None, "accuracy")?;
     // 1. Convergence of the reference.
     let conv = convergence(&p, &cache)?;
     eprintln!(
