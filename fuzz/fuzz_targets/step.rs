@@ -10,6 +10,9 @@ fn take_f32(data: &mut &[u8]) -> Option<f32> {
     Some(f32::from_le_bytes(*head))
 }
 
+/// Model steps taken over the whole fuzzing run.
+static STEPS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 fuzz_target!(|bytes: &[u8]| {
     let mut data = bytes;
     let mut p = Params::<f32>::default();
@@ -53,6 +56,11 @@ fuzz_target!(|bytes: &[u8]| {
         steps += 1;
         if steps > 400 {
             break;
+        }
+        // Progress on stderr every 10⁶ steps over the whole fuzzing run (how far it got).
+        let total = STEPS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if total % 1_000_000 == 0 {
+            eprintln!("fuzz step: {total} model steps");
         }
         let before = *m.state();
         match m.step(a) {
