@@ -21,7 +21,7 @@ fuzz_target!(|bytes: &[u8]| {
         return;
     };
     data = rest;
-    let mut factor = |d: &mut &[u8]| take_f32(d).map(|x| x.abs().clamp(1e-3, 1e3)).unwrap_or(1.0);
+    let factor = |d: &mut &[u8]| take_f32(d).map(|x| x.abs().clamp(1e-3, 1e3)).unwrap_or(1.0);
     if mask & 1 != 0 {
         p.beam.modulus *= factor(&mut data);
     }

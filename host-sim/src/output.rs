@@ -38,6 +38,15 @@ pub enum Status {
 }
 
 impl Status {
+    /// The status of a study of several points (runs), `failed` of which failed.
+    pub fn of_points(failed: usize) -> Self {
+        if failed > 0 {
+            Status::PointsFailed
+        } else {
+            Status::Complete
+        }
+    }
+
     fn name(self) -> &'static str {
         match self {
             Status::Complete => "complete",

@@ -92,11 +92,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             Some(out.write_with("fatigue.png", |p| plot(p, &title, &points, &amps))?)
         };
         let failed = points.iter().filter(|p| p.failed()).count();
-        let status = if failed > 0 {
-            Status::PointsFailed
-        } else {
-            Status::Complete
-        };
+        let status = Status::of_points(failed);
         let extra = json!({ "points": points.len(), "failed": failed });
         Ok(((points, csv_path, png), status, extra))
     })?;

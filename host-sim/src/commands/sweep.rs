@@ -56,11 +56,7 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
             Some(out.write_with("sweep.png", |p| plot(p, &s, &points, a.last))?)
         };
         let failed = points.iter().filter(|p| p.failed()).count();
-        let status = if failed > 0 {
-            Status::PointsFailed
-        } else {
-            Status::Complete
-        };
+        let status = Status::of_points(failed);
         let extra = json!({ "points": points.len(), "failed": failed });
         Ok(((points, csv_path, png), status, extra))
     })?;
