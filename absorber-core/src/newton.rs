@@ -200,16 +200,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         ws.built = true;
         let slot = ws.slots.get_mut(i).ok_or(Error::Singular)?;
         slot.key = None;
-        let [q, v, a] = qva;
-        self.residual_and_jacobian(
-            [q, v, a],
-            p.g_eff,
-            &p.ch,
-            p.contact,
-            p.plumb,
-            r,
-            &mut slot.band,
-        );
+        self.assemble_problem(p, qva, r, &mut slot.band);
         slot.pivots = if ws.pivot {
             self.pivot_fallback(p, qva, r, slot, false)?
         } else if slot.band.factor(self.pivot_ratio) {
@@ -222,6 +213,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             contact: p.contact,
         });
         Ok(())
+    }
+
+    /// Residual of `p` at `qva` into `r` and its Newton matrix into `band`.
+    #[inline]
+    fn assemble_problem(
+        &self,
+        p: &Problem<'_, T, D>,
+        [q, v, a]: &[SVector<T, D>; 3],
+        r: &mut SVector<T, D>,
+        band: &mut BandMatrix<T, D>,
+    ) {
+        self.residual_and_jacobian([q, v, a], p.g_eff, &p.ch, p.contact, p.plumb, r, band);
     }
 
     /// Factors the assembled matrix dense with partial pivoting: off the step path, or (rare)
@@ -239,16 +242,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         rebuild: bool,
     ) -> Result<Option<[usize; D]>, Error> {
         if rebuild {
-            let [q, v, a] = qva;
-            self.residual_and_jacobian(
-                [q, v, a],
-                p.g_eff,
-                &p.ch,
-                p.contact,
-                p.plumb,
-                r,
-                &mut slot.band,
-            );
+            self.assemble_problem(p, qva, r, &mut slot.band);
         }
         slot.dense = slot.band.to_dense();
         linalg::factor_pivoted(&mut slot.dense)

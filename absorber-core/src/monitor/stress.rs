@@ -157,7 +157,7 @@ fn reaction_moment_at<T: Real, S: Scene, const N: usize, const D: usize>(
     let g_eff = model.params().gravity + base_accel;
     let r = row_times(&b.mass, ROW, &a)
         + row_times(&b.stiffness, ROW, &(u + v * b.damping))
-        + at(&b.element.axial_force(&u))
+        + at(&b.quadrature.force(&u))
         - at(&b.element.gravity_force(g_eff));
     -r
 }
