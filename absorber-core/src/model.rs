@@ -62,6 +62,10 @@ pub struct State<T, const D: usize> {
     pub v: SVector<T, D>,
     /// Accelerations relative to the base.
     pub a: SVector<T, D>,
+    /// The generalized-α scheme's acceleration-like variable `a_n` (Arnold & Brüls 2007;
+    /// [`crate::Integrator`]). Newmark's method never reads it (it equals `a` there); after an
+    /// impact, a start or a restored state it restarts at `a`.
+    pub pseudo_accel: SVector<T, D>,
     /// Time since the start \[s\], `steps · h` (not a running sum: in `f32` adding 3 ms to an
     /// hour drifts by tens of seconds).
     pub time: T,
@@ -157,6 +161,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 q: z,
                 v: z,
                 a: z,
+                pseudo_accel: z,
                 time: T::zero(),
                 steps: 0,
                 base_accel: T::zero(),
@@ -198,6 +203,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             q,
             v: SVector::zeros(),
             a: SVector::zeros(),
+            pseudo_accel: SVector::zeros(),
             time: T::zero(),
             steps: 0,
             base_accel: T::zero(),

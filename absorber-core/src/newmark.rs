@@ -1,35 +1,78 @@
-//! Newmark's method (paper §4, eqs. 29–31): predictor, and the corrector solved for the new
-//! acceleration by Newton ([`crate::newton`]).
+//! Newmark's method (paper §4, eqs. 29–31) and its generalization, the generalized-α scheme
+//! (Chung & Hulbert 1993, in the form of Arnold & Brüls 2007): predictor, and the corrector
+//! solved for the new acceleration by Newton ([`crate::newton`]).
 //!
-//! With `ã = q̈_{n+1}` the unknown:
-//! `q_{n+1} = q_n + h q̇_n + h²(½ − β) q̈_n + βh² ã`, `q̇_{n+1} = q̇_n + h(1 − γ) q̈_n + γh ã`,
-//! so the Newton matrix along the unknown is `M + γh C + βh² K` (chain `c_m = 1`, `c_v = γh`,
-//! `c_q = βh²`).
+//! With `x = q̈_{n+1}` the unknown and `a` the acceleration-like variable of the scheme
+//! (`a = q̈` for Newmark):
+//! - `a_{n+1} = b + κ x`, `b = (α_f q̈_n − α_m a_n)/(1 − α_m)`, `κ = (1 − α_f)/(1 − α_m)`;
+//! - `q_{n+1} = q_n + h q̇_n + h²(½ − β) a_n + βh² a_{n+1}`,
+//!   `q̇_{n+1} = q̇_n + h(1 − γ) a_n + γh a_{n+1}`;
+//!
+//! so the Newton matrix along the unknown is `M + κγh C + κβh² K` (chain `c_m = 1`,
+//! `c_v = κγh`, `c_q = κβh²`), and the equations of motion hold at `t_{n+1}` exactly as in
+//! Newmark's method (`α_m = α_f = 0`: `b = 0`, `κ = 1`; that path never touches `b`).
 
 use crate::error::Error;
 use crate::model::State;
 use crate::newton::{Solved, Workspace};
-use crate::params::NewtonKind;
+use crate::params::{Integrator, NewtonKind};
 use crate::scalar::{lit, Real};
 use crate::scene::Scene;
 use crate::system::{Problem, System};
 use crate::tip::Chain;
 use nalgebra::SVector;
 
+/// Constants of the generalized-α recursion `a_{n+1} = from_accel q̈_n + from_pseudo a_n +
+/// ratio q̈_{n+1}`, computed once from the parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlphaRecursion<T> {
+    /// `α_f / (1 − α_m)`.
+    pub from_accel: T,
+    /// `−α_m / (1 − α_m)`.
+    pub from_pseudo: T,
+    /// `κ = (1 − α_f) / (1 − α_m)`.
+    pub ratio: T,
+}
+
+impl<T: Real> AlphaRecursion<T> {
+    /// The constants of `integrator`, or `None` for Newmark's method.
+    pub fn of(integrator: &Integrator<T>) -> Option<Self> {
+        if integrator.is_newmark() {
+            return None;
+        }
+        let one = T::one();
+        let d = one - integrator.alpha_m;
+        Some(Self {
+            from_accel: integrator.alpha_f / d,
+            from_pseudo: -integrator.alpha_m / d,
+            ratio: (one - integrator.alpha_f) / d,
+        })
+    }
+}
+
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
-    /// The Newton chain of a Newmark step of length `h`: `(c_q, c_v, c_m) = (βh², γh, 1)`.
+    /// The Newton chain of a step of length `h`: `(c_q, c_v, c_m) = (κβh², κγh, 1)` (`κ = 1`
+    /// for Newmark).
     pub(crate) fn newmark_chain(&self, h: T) -> Chain<T> {
         let i = &self.params.integrator;
-        Chain {
-            c_q: i.beta * h * h,
-            c_v: i.gamma * h,
-            c_m: T::one(),
+        let (c_q, c_v) = (i.beta * h * h, i.gamma * h);
+        match &self.alpha {
+            None => Chain {
+                c_q,
+                c_v,
+                c_m: T::one(),
+            },
+            Some(g) => Chain {
+                c_q: c_q * g.ratio,
+                c_v: c_v * g.ratio,
+                c_m: T::one(),
+            },
         }
     }
 
-    /// One Newmark step of length `h` from `s` to the input `base_accel` at its end; the
-    /// ball's contact is kept (a ball on a stop stays projected on it). Time and step count are
-    /// the caller's.
+    /// One step of length `h` from `s` to the input `base_accel` at its end; the ball's
+    /// contact is kept (a ball on a stop stays projected on it). Time and step count are the
+    /// caller's.
     pub(crate) fn newmark(
         &self,
         s: &State<T, D>,
@@ -40,11 +83,25 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     ) -> Result<(State<T, D>, Solved<T, D>), Error> {
         let i = &self.params.integrator;
         let half = lit::<T>(0.5);
+        let pseudo = if self.alpha.is_some() {
+            &s.pseudo_accel
+        } else {
+            &s.a
+        };
         let mut q_pred = s.q;
         q_pred.axpy(h, &s.v, T::one());
-        q_pred.axpy(h * h * (half - i.beta), &s.a, T::one());
+        q_pred.axpy(h * h * (half - i.beta), pseudo, T::one());
         let mut v_pred = s.v;
-        v_pred.axpy(h * (T::one() - i.gamma), &s.a, T::one());
+        v_pred.axpy(h * (T::one() - i.gamma), pseudo, T::one());
+        // Generalized-α: the known part b of a_{n+1} enters the predictor like a Newmark
+        // acceleration (module doc).
+        let mut known = SVector::<T, D>::zeros();
+        if let Some(g) = &self.alpha {
+            known.axpy(g.from_accel, &s.a, T::zero());
+            known.axpy(g.from_pseudo, &s.pseudo_accel, T::one());
+            q_pred.axpy(i.beta * h * h, &known, T::one());
+            v_pred.axpy(i.gamma * h, &known, T::one());
+        }
         let ch = self.newmark_chain(h);
         let zero = SVector::zeros();
         let p = Problem {
@@ -63,6 +120,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             q: q_pred,
             v: v_pred,
             a,
+            pseudo_accel: a,
             time: s.time,
             steps: s.steps,
             base_accel,
@@ -70,6 +128,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         };
         next.q.axpy(ch.c_q, &a, T::one());
         next.v.axpy(ch.c_v, &a, T::one());
+        if let Some(g) = &self.alpha {
+            next.pseudo_accel = known;
+            next.pseudo_accel.axpy(g.ratio, &a, T::one());
+        }
         if let crate::model::Contact::OnStop(side) = next.contact {
             self.hold_on_stop(&mut next, side);
         }

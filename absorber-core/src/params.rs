@@ -87,13 +87,24 @@ impl<T: Real> BallParams<T> {
     }
 }
 
-/// Newmark integrator with Newton–Raphson (Table 1, "Numerical integration parameters").
+/// Newmark integrator with Newton–Raphson (Table 1, "Numerical integration parameters"), or its
+/// generalization, the generalized-α scheme ([`Integrator::generalized_alpha`]).
+///
+/// With `α_m = α_f = 0` (the default) it is Newmark's method. Otherwise it is the
+/// generalized-α method of Chung & Hulbert (1993) in the form of Arnold & Brüls (2007,
+/// *Multibody Syst. Dyn.* 18:185): the equations of motion hold at `t_{n+1}` and the Newmark
+/// formulas run on an acceleration-like variable `a` (`State::pseudo_accel`) with
+/// `(1 − α_m) a_{n+1} + α_m a_n = (1 − α_f) q̈_{n+1} + α_f q̈_n`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Integrator<T> {
     /// Newmark γ \[-\]: 0.5 conserves energy, larger values damp (paper: 0.7).
     pub gamma: T,
     /// Newmark β \[-\]: unconditionally stable for β ≥ (γ + ½)²/4 (paper: 0.36).
     pub beta: T,
+    /// Generalized-α weight of the previous acceleration in the inertia, α_m \[-\] (0: Newmark).
+    pub alpha_m: T,
+    /// Generalized-α weight of the previous acceleration in the forces, α_f \[-\] (0: Newmark).
+    pub alpha_f: T,
     /// Time step h \[s\] (paper: 0.003).
     pub step: T,
     /// Newton tolerance \[-\]: iterations stop when the position increment, in units of the
@@ -108,6 +119,36 @@ pub struct Integrator<T> {
     /// a slightly inexact step to a skipped one; the report's `increment` shows how inexact).
     /// Non-finite values are still errors. Off by default.
     pub accept_after_budget: bool,
+}
+
+impl<T: Real> Integrator<T> {
+    /// The generalized-α scheme with high-frequency spectral radius `rho_inf` ∈ \[0, 1\]
+    /// (Chung & Hulbert 1993, eqs. 25, 17, 20): `α_m = (2ρ∞ − 1)/(ρ∞ + 1)`,
+    /// `α_f = ρ∞/(ρ∞ + 1)`, `γ = ½ − α_m + α_f`, `β = ¼(1 − α_m + α_f)²`. Second-order
+    /// accurate and unconditionally stable for linear systems; modes the step cannot resolve
+    /// (ωh → ∞) are multiplied by ρ∞ per step, while the numerical damping ratio at ωh ≪ 1
+    /// grows only like (ωh)³ (docs/model.md gives it per mode). ρ∞ = 1 is the trapezoidal rule.
+    /// The step, tolerance and Newton settings are kept. A `rho_inf` outside \[0, 1\] gives
+    /// parameters that [`Params::validate`] rejects.
+    pub fn generalized_alpha(self, rho_inf: T) -> Self {
+        let (one, half) = (T::one(), lit::<T>(0.5));
+        let alpha_m = (lit::<T>(2.0) * rho_inf - one) / (rho_inf + one);
+        let alpha_f = rho_inf / (rho_inf + one);
+        let gamma = half - alpha_m + alpha_f;
+        let s = one - alpha_m + alpha_f;
+        Self {
+            alpha_m,
+            alpha_f,
+            gamma,
+            beta: lit::<T>(0.25) * s * s,
+            ..self
+        }
+    }
+
+    /// Whether this is Newmark's method (`α_m = α_f = 0`).
+    pub fn is_newmark(&self) -> bool {
+        self.alpha_m == T::zero() && self.alpha_f == T::zero()
+    }
 }
 
 /// Newton variant of the step solve (all converge to the same tolerance; `crate::newton`
@@ -193,6 +234,8 @@ impl<T: Real> Default for Params<T> {
             integrator: Integrator {
                 gamma: lit(0.7),
                 beta: lit(0.36),
+                alpha_m: T::zero(),
+                alpha_f: T::zero(),
                 step: lit(0.003),
                 tolerance: lit(1e-5),
                 max_iterations: 100,
@@ -294,10 +337,33 @@ impl<T: Real> Params<T> {
             }
         }
         let i = &self.integrator;
-        if !i.gamma.is_finite() || i.gamma < lit(0.5) || i.gamma > T::one() {
+        // Chung & Hulbert (1993): unconditional stability needs α_m ≤ α_f ≤ ½ and
+        // γ ≥ ½ − α_m + α_f (ρ∞ ≥ 0 gives α_m ≥ −1).
+        if !i.alpha_f.is_finite() || i.alpha_f < T::zero() || i.alpha_f > lit(0.5) {
+            return Err(Error::InvalidParameter {
+                field: "integrator.alpha_f",
+                reason: "must lie in [0, 0.5]",
+            });
+        }
+        if !i.alpha_m.is_finite() || i.alpha_m < -T::one() || i.alpha_m > i.alpha_f {
+            return Err(Error::InvalidParameter {
+                field: "integrator.alpha_m",
+                reason: "must lie in [-1, alpha_f] for unconditional stability",
+            });
+        }
+        let gamma_min = lit::<T>(0.5) - i.alpha_m + i.alpha_f;
+        if i.gamma.is_finite() && i.gamma < gamma_min * lit(1.0 - 1e-6) {
             return Err(Error::InvalidParameter {
                 field: "integrator.gamma",
-                reason: "must lie in [0.5, 1] (γ < 0.5 amplifies)",
+                reason: "must be at least 1/2 - alpha_m + alpha_f for unconditional stability",
+            });
+        }
+        // Newmark: γ ≤ 1; generalized-α needs up to ½ − α_m + α_f (1.5 at ρ∞ = 0).
+        if !i.gamma.is_finite() || i.gamma < lit(0.5) || i.gamma > T::one() + i.alpha_f - i.alpha_m
+        {
+            return Err(Error::InvalidParameter {
+                field: "integrator.gamma",
+                reason: "must lie in [0.5, 1 + alpha_f - alpha_m] (γ < 0.5 amplifies)",
             });
         }
         let beta_min = (i.gamma + lit(0.5)) * (i.gamma + lit(0.5)) / lit(4.0);

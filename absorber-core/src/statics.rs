@@ -121,6 +121,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             q,
             v,
             a: SVector::zeros(),
+            pseudo_accel: SVector::zeros(),
             time: T::zero(),
             steps: 0,
             base_accel,
@@ -154,6 +155,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         ws.begin_solve();
         s.a = self.consistent_acceleration(&s, ws, NewtonKind::Full)?.x;
+        s.pseudo_accel = s.a;
         Ok(s)
     }
 }

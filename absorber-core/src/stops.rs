@@ -93,6 +93,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             report.iterations += acc.iterations;
             mid.a = acc.x;
         }
+        // The velocity jumped: the generalized-α recursion restarts from the new acceleration.
+        mid.pseudo_accel = mid.a;
         let rest = h - tau * h;
         let mut end = if rest > h * lit(1e-6) {
             let (e, s) = self.newmark(&mid, rest, base_accel, ws, kind)?;
@@ -115,6 +117,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             let acc = self.consistent_acceleration(&end, ws, kind)?;
             report.iterations += acc.iterations;
             end.a = acc.x;
+            end.pseudo_accel = end.a;
             if side2.sign::<T>() * self.contact_force(&end) > T::zero() {
                 end.contact = Contact::Off;
             }
@@ -220,6 +223,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             self.hold_on_stop(&mut held, side);
             let acc = self.consistent_acceleration(&held, ws, self.params.integrator.newton)?;
             held.a = acc.x;
+            held.pseudo_accel = held.a;
             if side.sign::<T>() * self.contact_force(&held) <= T::zero() {
                 *s = held;
                 impact.stuck = true;
@@ -260,7 +264,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         self.refresh_at(&p, &[s.q, s.v, s.a], ws, &mut r)
     }
 
-    /// Projects a ball resting on a stop onto α = side·α_max: φ = ψ − (ρ/r_b) α, φ̇ = ψ̇, φ̈ = ψ̈.
+    /// Projects a ball resting on a stop onto α = side·α_max: φ = ψ − (ρ/r_b) α, φ̇ = ψ̇, φ̈ = ψ̈
+    /// (and the generalized-α variable of φ likewise: a held φ is no unknown of its own).
     pub(crate) fn hold_on_stop(&self, s: &mut State<T, D>, side: Side) {
         let (psi, rate, acc) = tip::psi_all(&Self::local(&s.q, &s.v, &s.a));
         let lock = side.sign::<T>() * self.params.ball.stop_angle;
@@ -273,6 +278,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             *q = psi - lock / k;
             *v = rate;
             *a = acc;
+        }
+        if let Some(p) = s.pseudo_accel.get_mut(Self::SPIN) {
+            *p = acc;
         }
     }
 }

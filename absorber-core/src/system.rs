@@ -38,6 +38,8 @@ pub struct System<T, S, const N: usize, const D: usize> {
     pub(crate) settle: T,
     /// [`crate::newton::SLOW`] in the scalar.
     pub(crate) slow: T,
+    /// The generalized-α recursion's constants (`None`: Newmark).
+    pub(crate) alpha: Option<crate::newmark::AlphaRecursion<T>>,
     _scene: PhantomData<S>,
 }
 
@@ -119,6 +121,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 }
             },
             slow: lit(crate::newton::SLOW),
+            alpha: crate::newmark::AlphaRecursion::of(&params.integrator),
             _scene: PhantomData,
         }
     }

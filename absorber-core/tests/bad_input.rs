@@ -41,6 +41,21 @@ fn every_bad_parameter_is_rejected_with_its_name() {
     rejects(|p| p.ball.stick_speed = -0.1, "ball.stick_speed");
     rejects(|p| p.ball.initial_angle = 2.0, "ball.initial_angle");
     rejects(|p| p.integrator.gamma = 0.4, "integrator.gamma");
+    // Generalized-α (Chung & Hulbert's stability conditions).
+    rejects(|p| p.integrator.alpha_f = 0.6, "integrator.alpha_f");
+    rejects(|p| p.integrator.alpha_f = f64::NAN, "integrator.alpha_f");
+    rejects(|p| p.integrator.alpha_m = 0.1, "integrator.alpha_m");
+    rejects(
+        |p| p.integrator = p.integrator.generalized_alpha(1.5),
+        "integrator.alpha_f",
+    );
+    rejects(
+        |p| {
+            p.integrator = p.integrator.generalized_alpha(0.8);
+            p.integrator.gamma = 0.55;
+        },
+        "integrator.gamma",
+    );
     rejects(|p| p.integrator.beta = 0.2, "integrator.beta");
     rejects(|p| p.integrator.step = 0.0, "integrator.step");
     rejects(

@@ -142,16 +142,18 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             initial_angle: b.initial_angle as f32,
             impact_model: b.impact_model,
         },
-        integrator: {
-            let mut i: Integrator<f32> = Params::<f32>::default().integrator;
-            i.gamma = p.integrator.gamma as f32;
-            i.beta = p.integrator.beta as f32;
-            i.step = p.integrator.step as f32;
-            i.tolerance = p.integrator.tolerance as f32;
-            i.max_iterations = p.integrator.max_iterations;
-            i.newton = p.integrator.newton;
-            i.accept_after_budget = p.integrator.accept_after_budget;
-            i
+        // Every field spelled out: a new field of the core fails to compile here instead of
+        // silently keeping its f32 default (generalized-α once did).
+        integrator: Integrator {
+            gamma: p.integrator.gamma as f32,
+            beta: p.integrator.beta as f32,
+            alpha_m: p.integrator.alpha_m as f32,
+            alpha_f: p.integrator.alpha_f as f32,
+            step: p.integrator.step as f32,
+            tolerance: p.integrator.tolerance as f32,
+            max_iterations: p.integrator.max_iterations,
+            newton: p.integrator.newton,
+            accept_after_budget: p.integrator.accept_after_budget,
         },
         damping: Damping {
             stiffness_proportional: p.damping.stiffness_proportional as f32,

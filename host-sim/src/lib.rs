@@ -20,6 +20,7 @@ pub mod excitation;
 pub mod fatigue;
 pub mod fft;
 pub mod figures;
+pub mod integrator;
 pub mod output;
 pub mod plot;
 pub mod run;

@@ -19,7 +19,7 @@
 //! [ball]       # mass, inertia, radius, track_radius, stop_angle_deg, restitution,
 //!              # stick_speed [rad/s], initial_angle_deg, impact_model = "over-step" | "instantaneous"
 //! [damping]    # stiffness_proportional [s], or ratio [-] at frequency [Hz]
-//! [integrator] # gamma, beta, step [s], tolerance, max_iterations
+//! [integrator] # scheme (newmark | generalized-alpha), rho_inf, gamma, beta, step [s], tolerance, max_iterations
 //! [excitation] # type = "harmonic", amplitude [m], frequency [Hz]
 //!              # or type = "csv", file = "base.csv" (columns t [s], accel [m/s²])
 //! [outputs]    # directory, plots = ["time", "fft", "phase", "energy"], transient [s], every
@@ -184,6 +184,13 @@ pub struct DampingSection {
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct IntegratorSection {
+    /// `newmark` (γ, β as given; the paper's) or `generalized-alpha` (γ, β, α_m, α_f from
+    /// `rho_inf`; Chung & Hulbert 1993).
+    pub scheme: SchemeSetting,
+    /// High-frequency spectral radius ρ∞ ∈ \[0, 1\] of the generalized-α scheme (required by
+    /// it, not allowed with Newmark).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rho_inf: Option<f64>,
     /// Newmark γ.
     pub gamma: f64,
     /// Newmark β.
@@ -200,6 +207,17 @@ pub struct IntegratorSection {
     pub newton: NewtonSetting,
     /// Accept the iterate after `max_iterations` instead of failing the step.
     pub accept_after_budget: bool,
+}
+
+/// Scene-file spelling of the time integration scheme ([`absorber_core::Integrator`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SchemeSetting {
+    /// Newmark's method with the scene's γ and β (default; the paper's).
+    #[default]
+    Newmark,
+    /// The generalized-α method with spectral radius `rho_inf`.
+    GeneralizedAlpha,
 }
 
 /// Scene-file spelling of [`absorber_core::NewtonKind`].
@@ -350,6 +368,8 @@ impl Default for IntegratorSection {
     fn default() -> Self {
         let p = Params::<f64>::default().integrator;
         Self {
+            scheme: SchemeSetting::Newmark,
+            rho_inf: None,
             gamma: p.gamma,
             beta: p.beta,
             step: p.step,
@@ -608,6 +628,26 @@ impl Scene {
                     NewtonSetting::Modified => NewtonKind::Modified,
                 };
                 i.accept_after_budget = f.integrator.accept_after_budget;
+                let fi = &f.integrator;
+                match (fi.scheme, fi.rho_inf) {
+                    (SchemeSetting::Newmark, None) => {}
+                    (SchemeSetting::Newmark, Some(_)) => bail!(
+                        "`integrator.rho_inf` needs `integrator.scheme = \"generalized-alpha\"`"
+                    ),
+                    (SchemeSetting::GeneralizedAlpha, None) => bail!(
+                        "`integrator.scheme = \"generalized-alpha\"` needs `integrator.rho_inf` (0 to 1; e.g. 0.8)"
+                    ),
+                    (SchemeSetting::GeneralizedAlpha, Some(r)) => {
+                        if !(0.0..=1.0).contains(&r) {
+                            bail!("invalid value for `integrator.rho_inf`: {r} (must lie in [0, 1])");
+                        }
+                        let paper = IntegratorSection::default();
+                        if fi.gamma != paper.gamma || fi.beta != paper.beta {
+                            bail!("`integrator.gamma` and `integrator.beta` are set by `integrator.rho_inf` with the generalized-alpha scheme: leave them out");
+                        }
+                        i = i.generalized_alpha(r);
+                    }
+                }
                 i
             },
             damping,
@@ -801,6 +841,10 @@ fn scene_key(field: &str, s: &Scene) -> (String, String) {
         "integrator.gamma" => (field.into(), v(f.integrator.gamma)),
         "integrator.beta" => (field.into(), v(f.integrator.beta)),
         "integrator.step" => (field.into(), v(f.integrator.step)),
+        "integrator.alpha_m" | "integrator.alpha_f" => (
+            "integrator.rho_inf".into(),
+            f.integrator.rho_inf.map_or("?".into(), v),
+        ),
         "integrator.tolerance" => (field.into(), v(f.integrator.tolerance)),
         "integrator.max_iterations" => (field.into(), f.integrator.max_iterations.to_string()),
         "damping.stiffness_proportional" => (

@@ -121,6 +121,19 @@ fn inconsistent_scene_values_are_named() {
         ("[ball]\nstop_angle_deg = 180.0\n", "ball.stop_angle_deg"),
         ("[integrator]\ngamma = 0.9\nbeta = 0.3\n", "integrator.beta"),
         ("[integrator]\ngamma = 1.5\n", "integrator.gamma"),
+        ("[integrator]\nrho_inf = 0.8\n", "integrator.rho_inf"),
+        (
+            "[integrator]\nscheme = \"generalized-alpha\"\n",
+            "integrator.rho_inf",
+        ),
+        (
+            "[integrator]\nscheme = \"generalized-alpha\"\nrho_inf = 1.2\n",
+            "integrator.rho_inf",
+        ),
+        (
+            "[integrator]\nscheme = \"generalized-alpha\"\nrho_inf = 0.8\ngamma = 0.6\n",
+            "integrator.gamma",
+        ),
         (
             "[excitation]\ntype = \"csv\"\nfile = \"a.csv\"\nfrequency = 3.0\n",
             "excitation.frequency",

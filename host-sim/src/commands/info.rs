@@ -30,18 +30,38 @@ pub fn modes(a: &ModesArgs) -> Result<()> {
         .natural_frequencies()
         .map_err(|e| crate::scene::map_core_error(e, &s))?;
     let f: Vec<f64> = f.into_iter().take(a.count).collect();
+    let p = s.params()?;
+    // Damping per mode: the structure's (C = c K: ζ = c ω / 2) and the integrator's own.
+    let structural: Vec<f64> = f
+        .iter()
+        .map(|x| p.damping.stiffness_proportional * std::f64::consts::PI * x)
+        .collect();
+    let numerical: Vec<Option<f64>> = f
+        .iter()
+        .map(|x| crate::integrator::numerical_damping(&p.integrator, *x))
+        .collect();
     if a.json {
         println!(
             "{}",
-            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "frequencies": f })
+            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "frequencies": f, "structural_damping": structural, "numerical_damping": numerical })
         );
     } else {
         println!("{}", describe(&s));
+        // C = c K_bending: ζ = c ω / 2 holds for the bending modes; the axial modes (the
+        // highest ones, kHz) get no structural damping.
+        println!("mode  frequency [Hz]  damping ratio: structural (c ω/2, bending)  numerical (integrator)");
         for (i, x) in f.iter().enumerate() {
-            println!("mode {}: {x:.4} Hz", i + 1);
+            let num = match numerical[i] {
+                Some(z) => format!("{z:.3e}"),
+                None => "not resolved by the step".into(),
+            };
+            println!(
+                "{:>4}  {x:>14.4}  {:>40.3e}  {num:>22}",
+                i + 1,
+                structural[i]
+            );
         }
         if s.file.kind.free_ball() {
-            let p = s.params()?;
             println!(
                 "(ball on a fixed housing: {:.4} Hz)",
                 p.ball.fixed_housing_frequency(p.gravity)

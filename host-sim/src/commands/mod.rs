@@ -64,8 +64,12 @@ pub fn describe(s: &Scene) -> String {
                 .unwrap_or_default()
         ),
     };
+    let scheme = match f.integrator.rho_inf {
+        Some(r) => format!(" (generalized-α, ρ∞ = {r})"),
+        None => String::new(),
+    };
     format!(
-        "scene {}: {}, {} elements, {}, {} solver; {}; {} s with h = {} s",
+        "scene {}: {}, {} elements, {}, {} solver; {}; {} s with h = {} s{scheme}",
         f.name,
         f.kind.name(),
         f.elements,

@@ -99,6 +99,10 @@ pub struct FullState {
     pub v: Vec<f64>,
     /// Accelerations relative to the base.
     pub a: Vec<f64>,
+    /// The generalized-α scheme's acceleration-like variable (`absorber_core::State`'s
+    /// `pseudo_accel`); equal to `a` except on the independent coordinates after a
+    /// generalized-α step.
+    pub pa: Vec<f64>,
     /// Time \[s\].
     pub time: f64,
     /// Base acceleration input at `time` \[m/s²\].
@@ -155,6 +159,7 @@ struct Work {
 }
 
 use absorber_core::model::{DAMPING_TRIALS, END_BEYOND_STOP, MAX_STEP, START_BEYOND_STOP};
+use absorber_core::newmark::AlphaRecursion;
 use absorber_core::newton::{SETTLE, SLOW};
 use absorber_core::NewtonKind;
 
@@ -293,6 +298,7 @@ impl FullSolver {
             q,
             v: vec![0.0; nz],
             a: vec![0.0; nz],
+            pa: vec![0.0; nz],
             time: 0.0,
             base_accel: 0.0,
             contact: Contact::Off,
@@ -1002,6 +1008,7 @@ impl FullSolver {
             q: vec![0.0; self.nz],
             v: vec![0.0; self.nz],
             a: vec![0.0; self.nz],
+            pa: Vec::new(),
             time,
             base_accel,
             contact,
@@ -1029,6 +1036,8 @@ impl FullSolver {
         {
             return Err(Error::NonFiniteState);
         }
+        // The generalized-α recursion restarts here; `newmark` sets its independent entries.
+        s.pa = s.a.clone();
         Ok(s)
     }
 
@@ -1161,7 +1170,23 @@ impl FullSolver {
         )
     }
 
-    /// One Newmark step of the independent coordinates.
+    /// The Newton chain of a step of length `h`: `(κβh², κγh, 1)`, `κ = (1 − α_f)/(1 − α_m)`
+    /// (`κ = 1` for Newmark; `absorber_core::newmark`).
+    fn step_chain(&self, h: f64) -> Chain<f64> {
+        let it = &self.params.integrator;
+        let (c_q, c_v) = (it.beta * h * h, it.gamma * h);
+        match AlphaRecursion::of(it) {
+            None => Chain { c_q, c_v, c_m: 1.0 },
+            Some(g) => Chain {
+                c_q: c_q * g.ratio,
+                c_v: c_v * g.ratio,
+                c_m: 1.0,
+            },
+        }
+    }
+
+    /// One Newmark (or generalized-α) step of the independent coordinates
+    /// (`absorber_core::newmark` states the scheme).
     fn newmark(
         &self,
         s: &FullState,
@@ -1169,22 +1194,36 @@ impl FullSolver {
         base_accel: f64,
     ) -> Result<(FullState, Solved), Error> {
         let it = &self.params.integrator;
+        let alpha = AlphaRecursion::of(it);
         let mode = self.mode(s.contact);
         let qi = self.gather_ind(&s.q, mode);
         let vi = self.gather_ind(&s.v, mode);
         let ai = self.gather_ind(&s.a, mode);
-        let ni = qi.len();
-        let q_pred: Vec<f64> = (0..ni)
-            .map(|i| qi[i] + vi[i] * h + ai[i] * (h * h * (0.5 - it.beta)))
-            .collect();
-        let v_pred: Vec<f64> = (0..ni)
-            .map(|i| vi[i] + ai[i] * (h * (1.0 - it.gamma)))
-            .collect();
-        let ch = Chain {
-            c_q: it.beta * h * h,
-            c_v: it.gamma * h,
-            c_m: 1.0,
+        let pai = match alpha {
+            Some(_) => self.gather_ind(&s.pa, mode),
+            None => ai.clone(),
         };
+        let ni = qi.len();
+        // Generalized-α: the known part of a_{n+1}.
+        let known: Vec<f64> = match alpha {
+            Some(g) => (0..ni)
+                .map(|i| g.from_accel * ai[i] + g.from_pseudo * pai[i])
+                .collect(),
+            None => vec![0.0; ni],
+        };
+        let mut q_pred: Vec<f64> = (0..ni)
+            .map(|i| qi[i] + vi[i] * h + pai[i] * (h * h * (0.5 - it.beta)))
+            .collect();
+        let mut v_pred: Vec<f64> = (0..ni)
+            .map(|i| vi[i] + pai[i] * (h * (1.0 - it.gamma)))
+            .collect();
+        if alpha.is_some() {
+            for i in 0..ni {
+                q_pred[i] += known[i] * (it.beta * h * h);
+                v_pred[i] += known[i] * (it.gamma * h);
+            }
+        }
+        let ch = self.step_chain(h);
         let z = vec![0.0; ni];
         let mut warm = self.local_of(&s.q);
         let solved = self.newton(
@@ -1203,7 +1242,12 @@ impl FullSolver {
         let a = &solved.x;
         let qn: Vec<f64> = (0..ni).map(|i| q_pred[i] + a[i] * ch.c_q).collect();
         let vn: Vec<f64> = (0..ni).map(|i| v_pred[i] + a[i] * ch.c_v).collect();
-        let next = self.complete(&qn, &vn, a, mode, s, s.time + h, base_accel, s.contact)?;
+        let mut next = self.complete(&qn, &vn, a, mode, s, s.time + h, base_accel, s.contact)?;
+        if let Some(g) = alpha {
+            for i in 0..ni {
+                next.pa[self.ind_to_z(i)] = known[i] + g.ratio * a[i];
+            }
+        }
         Ok((next, solved))
     }
 
@@ -1439,11 +1483,7 @@ impl FullSolver {
             let e = if plastic { 0.0 } else { ball.restitution };
             let it = &self.params.integrator;
             let ch = if ball.impact_model == ImpactModel::OverStep {
-                Chain {
-                    c_q: it.beta * it.step * it.step,
-                    c_v: it.gamma * it.step,
-                    c_m: 1.0,
-                }
+                self.step_chain(it.step)
             } else {
                 Chain {
                     c_q: 0.0,
