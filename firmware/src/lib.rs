@@ -527,5 +527,7 @@ pub fn host_main<M: Sim>() {
     std::process::exit(code);
 }
 
+pub mod cost;
+
 #[cfg(target_os = "none")]
 pub mod target;

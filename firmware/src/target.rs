@@ -187,6 +187,22 @@ pub fn target_main<M: Sim>(slot: &'static mut MaybeUninit<M>) -> ! {
     semihosting::process::exit(code)
 }
 
+/// `fw-cost`'s `main`: the configuration from the semihosting arguments, run, exit code.
+pub fn cost_main() -> ! {
+    let mut out = Out(semihosting::io::stdout().ok());
+    let mut c = crate::cost::Config::default();
+    if let Ok(args) = semihosting::experimental::env::args::<512>() {
+        for a in (&args).into_iter().skip(1).flatten() {
+            if let Err(key) = c.set(a) {
+                let _ = writeln!(out, "fw-cost: bad argument (key `{key}`)");
+                semihosting::process::exit(4)
+            }
+        }
+    }
+    let code = crate::cost::run(&c, &mut out);
+    semihosting::process::exit(i32::from(code))
+}
+
 /// Panics end the run with exit code 101 (the model itself never panics; see docs/embedded.md).
 #[cfg(not(feature = "panic-never"))]
 #[panic_handler]
