@@ -132,7 +132,7 @@ impl Config {
 
     fn steps(&self) -> u32 {
         let n = libm::round(self.seconds / self.step);
-        if n.is_finite() && n >= 1.0 && n < 1e7 {
+        if (1.0..1e7).contains(&n) {
             n as u32
         } else {
             0
