@@ -46,7 +46,7 @@ pub mod modes;
 pub mod monitor;
 pub mod newmark;
 pub mod newton;
-mod outputs;
+pub mod outputs;
 pub mod params;
 pub mod scalar;
 pub mod scene;
@@ -59,6 +59,7 @@ pub mod trig;
 pub use energy::Energies;
 pub use error::Error;
 pub use model::{Contact, Impact, Model, Side, State, StepReport};
+pub use outputs::ContactForces;
 pub use params::{
     BallParams, BeamParams, Damping, ImpactModel, Integrator, NewtonKind, Params, TipParams,
 };

@@ -5,6 +5,32 @@ use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
 use crate::tip;
 
+/// The force the track puts on the ball centre, in the track's frame (free-ball scenes).
+///
+/// With A the beam end (the track's centre), θ the orbit angle from the downward vertical, the
+/// inward normal `n = (−sin θ, cos θ)` (from the ball centre towards A) and the tangent
+/// `t = (cos θ, sin θ)`, Newton's law for the ball centre `C = A + ρ(sin θ, −cos θ)` in the frame
+/// translating with the base (effective gravity `g + ÿ_b`) gives
+/// `N = m_b [−ẍ_A sin θ + (ÿ_A + g + ÿ_b) cos θ + ρ θ̇²]` and
+/// `F_t = m_b [ẍ_A cos θ + (ÿ_A + g + ÿ_b) sin θ + ρ θ̈]` (docs/model.md, "Contact forces").
+/// A bilateral track can pull (`N < 0`); a real one cannot: the ball would leave it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactForces<T> {
+    /// Normal force N along n \[N\] (positive: the track pushes the ball towards A).
+    pub normal: T,
+    /// Tangential force F_t along t \[N\]: friction (rolling without slip needs it), plus the
+    /// stop's reaction while the ball rests on a stop.
+    pub tangential: T,
+}
+
+impl<T: Real> ContactForces<T> {
+    /// The friction coefficient rolling needs, `|F_t| / N`; `None` when the track does not
+    /// push (`N ≤ 0`: no friction can hold the ball).
+    pub fn required_friction(&self) -> Option<T> {
+        (self.normal > T::zero()).then(|| self.tangential.abs() / self.normal)
+    }
+}
+
 /// The angles of one state, each evaluated once: ψ and ψ̇ of the end slope, cos ψ and sin ψ
 /// taken from the slope vector itself, `(a₃, a₄)/|a|` (no trigonometric call; the model's
 /// step does the same), and the ball's orbit angle θ and θ̇ (`None` without a ball; = ψ for a
@@ -100,6 +126,27 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             return None;
         }
         self.angles_of(&self.state).ball_relative()
+    }
+
+    /// The track's force on the ball ([`ContactForces`]); `None` without a free ball.
+    pub fn contact_forces(&self) -> Option<ContactForces<T>> {
+        if !matches!(S::BALL, BallKind::Free) || S::EXTRA_DOFS != 1 {
+            return None;
+        }
+        let s = &self.state;
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (_, _, psi_accel) = tip::psi_all(&x);
+        let i = &self.sys.inertia;
+        let (theta, theta_rate) = tip::orbit_angle(i, &x);
+        let theta_accel = i.orbit_per_tilt * psi_accel - i.orbit_per_spin * x.a[4];
+        let (sin, cos) = theta.fast_sin_cos();
+        let ball = &self.sys.params.ball;
+        let rho = ball.path_radius();
+        let (xa, ya_g) = (x.a[0], x.a[1] + self.sys.effective_gravity(s.base_accel));
+        Some(ContactForces {
+            normal: ball.mass * (-xa * sin + ya_g * cos + rho * theta_rate * theta_rate),
+            tangential: ball.mass * (xa * cos + ya_g * sin + rho * theta_accel),
+        })
     }
 
     /// Time since the start \[s\].

@@ -50,8 +50,11 @@ pub enum Command {
     /// velocities, i.e. with the base velocity; potentials as changes from the static state,
     /// with the base displacement); iterations (Newton, per step); impact (1 if the ball hit a
     /// stop); then base_accel [m/s²], tip_velocity [m/s], tip_rate, ball_rate, ball_rel_rate
-    /// [rad/s], ball_spin φ [rad], ball_spin_rate [rad/s]. Base velocity and displacement are
-    /// closed form for a harmonic excitation and integrated (zero mean) for a CSV one.
+    /// [rad/s], ball_spin φ [rad], ball_spin_rate [rad/s], normal_force and tangential_force of
+    /// the track on a free ball [N] (N < 0: the track would have to pull: a real ball would
+    /// leave it). Base velocity and displacement are closed form for a harmonic excitation and
+    /// integrated (zero mean) for a CSV one. The summary says how long the track pulled and how
+    /// long rolling without slip needed more friction than `ball.friction`.
     ///
     /// Plots `<out>/<name>_{time,fft,phase,energy}.png`: time histories (min/max envelopes),
     /// FFT of tip and ball after the transient (at most the last 2^20 samples), phase planes

@@ -89,6 +89,12 @@ impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator
         }
     }
 
+    fn contact_forces(&self) -> Option<(f64, f64)> {
+        self.model
+            .contact_forces()
+            .map(|c| (f64_of(c.normal), f64_of(c.tangential)))
+    }
+
     fn energies(&self, base_velocity: f64, base_displacement: f64) -> Energies<f64> {
         let lit = absorber_core::scalar::lit::<T>;
         energies_f64(

@@ -85,6 +85,12 @@ pub struct Row {
     pub ball_spin: f64,
     /// φ̇ \[rad/s\].
     pub ball_spin_rate: f64,
+    /// Normal force of the track on the ball \[N\] (negative: the track pulls, which a real
+    /// track cannot; NaN without a free ball; `absorber_core::ContactForces`).
+    pub normal_force: f64,
+    /// Tangential force of the track on the ball \[N\] (rolling friction; plus the stop's
+    /// reaction while the ball rests on a stop; NaN without a free ball).
+    pub tangential_force: f64,
 }
 
 /// The CSV header (also documents the columns).
@@ -97,8 +103,10 @@ pub const CSV_HEADER: &str = "\
 #   (kinetic with absolute velocities, potentials as changes from the static state plus the base displacement);
 # iterations: Newton iterations of the step; impact: 1 if the ball hit a stop in the step;
 # base_accel [m/s^2]; tip_velocity [m/s]; tip_rate, ball_rate, ball_rel_rate [rad/s];
-# ball_spin: phi = psi - (rho/r_b)(theta - psi) [rad]; ball_spin_rate [rad/s]
-t,base_y,tip_y,tip_deflection,tip_angle,ball_angle,ball_rel_angle,beam_strain,beam_kinetic,beam_potential,tip_kinetic,tip_potential,ball_kinetic,ball_potential,iterations,impact,base_accel,tip_velocity,tip_rate,ball_rate,ball_rel_rate,ball_spin,ball_spin_rate";
+# ball_spin: phi = psi - (rho/r_b)(theta - psi) [rad]; ball_spin_rate [rad/s];
+# normal_force: track on ball, towards the track centre [N] (< 0: the track pulls: a real ball would leave it);
+# tangential_force: track on ball along increasing theta [N] (friction rolling needs; plus a stop's reaction)
+t,base_y,tip_y,tip_deflection,tip_angle,ball_angle,ball_rel_angle,beam_strain,beam_kinetic,beam_potential,tip_kinetic,tip_potential,ball_kinetic,ball_potential,iterations,impact,base_accel,tip_velocity,tip_rate,ball_rate,ball_rel_rate,ball_spin,ball_spin_rate,normal_force,tangential_force";
 
 impl Row {
     /// The row as a CSV line (no newline).
@@ -134,6 +142,8 @@ impl Row {
             self.ball_rel_rate,
             self.ball_spin,
             self.ball_spin_rate,
+            self.normal_force,
+            self.tangential_force,
         ] {
             s.push_str(&format!(",{x:.9e}"));
         }
@@ -177,6 +187,7 @@ pub fn simulate_with(
     let mut sim = build_simulator(scene, b0.accel)?;
     let row = |sim: &dyn Simulator, k: usize, iterations: u32, impact: bool| {
         let o = sim.observe();
+        let contact = sim.contact_forces();
         let b = exc.at(k);
         Row {
             t: o.time,
@@ -196,6 +207,8 @@ pub fn simulate_with(
             ball_rel_rate: o.ball_relative_rate,
             ball_spin: o.tip_angle - spin_ratio * o.ball_relative_angle,
             ball_spin_rate: o.tip_rate - spin_ratio * o.ball_relative_rate,
+            normal_force: contact.map_or(f64::NAN, |c| c.0),
+            tangential_force: contact.map_or(f64::NAN, |c| c.1),
         }
     };
     sink(&row(sim.as_ref(), 0, 0, false))?;
@@ -264,9 +277,35 @@ pub struct RunStats {
     beam_last: (f64, u64),
     ball_first: (f64, u64),
     ball_last: (f64, u64),
+    contact: ContactStats,
+}
+
+/// What the track had to do: how often it pulled the ball (N < 0), the smallest N, and the
+/// largest friction coefficient rolling needed (|F_t|/N with N > 0, off the stops).
+#[derive(Clone, Copy, Debug, Default)]
+struct ContactStats {
+    /// m_b g \[N\], the stop angle \[rad\] and the friction coefficient (`None`: no free ball).
+    ball: Option<(f64, f64, f64)>,
+    samples: u64,
+    /// Samples off the stops with N > 0 where rolling needs more than the friction coefficient.
+    slips: u64,
+    steady_slips: u64,
+    pulled: u64,
+    steady_samples: u64,
+    steady_pulled: u64,
+    min_normal: f64,
+    max_mu: f64,
 }
 
 impl RunStats {
+    /// Also reports the track's forces on a free ball: `(m_b g [N], stop angle [rad], friction
+    /// coefficient)` (`None` for scenes without a free ball).
+    pub fn with_ball(mut self, ball: Option<(f64, f64, f64)>) -> Self {
+        self.contact.ball = ball;
+        self.contact.min_normal = f64::INFINITY;
+        self
+    }
+
     /// For a run ending at `end` \[s\] whose steady state starts at `steady_from` \[s\]; the mean
     /// energies are taken over the first and the last min(10 s, end/2).
     pub fn new(end: f64, steady_from: f64) -> Self {
@@ -288,6 +327,7 @@ impl RunStats {
             beam_last: (0.0, 0),
             ball_first: (0.0, 0),
             ball_last: (0.0, 0),
+            contact: ContactStats::default(),
         }
     }
 
@@ -316,6 +356,26 @@ impl RunStats {
         }
         self.impacts += u64::from(r.impact);
         self.max_iterations = self.max_iterations.max(r.iterations);
+        if let (Some((_, stop, mu)), true) = (self.contact.ball, r.normal_force.is_finite()) {
+            let c = &mut self.contact;
+            let pulled = u64::from(r.normal_force < 0.0);
+            // On a stop the tangential force is the stop's, not friction's.
+            let on_stop = r.ball_rel_angle.abs() >= stop * (1.0 - 1e-9);
+            let need = r.tangential_force.abs() / r.normal_force;
+            let slips = u64::from(r.normal_force > 0.0 && !on_stop && need > mu);
+            c.samples += 1;
+            c.pulled += pulled;
+            c.slips += slips;
+            if r.t >= self.steady_from - eps {
+                c.steady_samples += 1;
+                c.steady_pulled += pulled;
+                c.steady_slips += slips;
+            }
+            c.min_normal = c.min_normal.min(r.normal_force);
+            if r.normal_force > 0.0 && !on_stop {
+                c.max_mu = c.max_mu.max(need);
+            }
+        }
         let e = &r.energies;
         let beam = e.beam_strain - first.energies.beam_strain + e.beam_kinetic + e.beam_potential;
         let ball = e.ball_kinetic + e.ball_potential;
@@ -352,6 +412,26 @@ impl RunStats {
             "beam_energy_last": mean(self.beam_last),
             "ball_energy_first": mean(self.ball_first),
             "ball_energy_last": mean(self.ball_last),
+            "contact": self.contact.json(),
+        })
+    }
+}
+
+impl ContactStats {
+    fn json(&self) -> serde_json::Value {
+        let Some((weight, _, mu)) = self.ball else {
+            return serde_json::Value::Null;
+        };
+        let frac = |k: u64, n: u64| if n > 0 { k as f64 / n as f64 } else { f64::NAN };
+        serde_json::json!({
+            "track_pulls_fraction": frac(self.pulled, self.samples),
+            "track_pulls_fraction_steady": frac(self.steady_pulled, self.steady_samples),
+            "normal_force_min": self.min_normal,
+            "normal_force_min_over_weight": self.min_normal / weight,
+            "required_friction_max": self.max_mu,
+            "friction": mu,
+            "slip_fraction": frac(self.slips, self.samples),
+            "slip_fraction_steady": frac(self.steady_slips, self.steady_samples),
         })
     }
 }

@@ -163,6 +163,12 @@ pub struct BallSection {
     pub initial_angle_deg: f64,
     /// Impact model.
     pub impact_model: ImpactSetting,
+    /// Static friction coefficient between ball and track \[-\]: the model assumes rolling
+    /// without slip, and `run` reports how long rolling would need more than this. Clean, dry
+    /// steel on steel is about 0.5–0.8, lubricated 0.1–0.2 (engineering handbooks, e.g. Marks'
+    /// *Standard Handbook for Mechanical Engineers*, table of friction coefficients); default
+    /// 0.5, the low end of dry steel.
+    pub friction: f64,
 }
 
 /// `[damping]`: stiffness-proportional structural damping, off by default.
@@ -361,6 +367,7 @@ impl Default for BallSection {
                 ImpactModel::Instantaneous => ImpactSetting::Instantaneous,
                 ImpactModel::OverStep => ImpactSetting::OverStep,
             },
+            friction: 0.5,
         }
     }
 }
@@ -587,6 +594,7 @@ impl Scene {
             _ => bail!("give either `damping.stiffness_proportional` or `damping.ratio` with `damping.frequency`"),
         };
         let b = &f.ball;
+        finite_positive(b.friction, "ball.friction")?;
         let p = Params {
             beam: BeamParams {
                 length: f.beam.length,

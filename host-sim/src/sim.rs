@@ -39,6 +39,10 @@ pub trait Simulator: Send {
     fn natural_frequencies(&self) -> Result<Vec<f64>, Error>;
     /// Static tip deflection \[m\].
     fn static_tip_deflection(&self) -> f64;
+    /// The track's force on the ball, `(N, F_t)` \[N\]: normal (negative: the track would have
+    /// to pull) and tangential (rolling friction, plus a stop's reaction while the ball rests
+    /// on it); `absorber_core::ContactForces`. `None` without a free ball.
+    fn contact_forces(&self) -> Option<(f64, f64)>;
     /// Short name of the solver ("core" or "full").
     fn solver_name(&self) -> &'static str;
 }

@@ -553,6 +553,8 @@ fn plot_buffers_stay_bounded_on_long_runs() {
         ball_rel_rate: 0.0,
         ball_spin: 0.0,
         ball_spin_rate: 0.0,
+        normal_force: f64::NAN,
+        tangential_force: f64::NAN,
     };
     let n = 3_000_000usize;
     for k in 0..=n {

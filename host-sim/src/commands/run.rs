@@ -72,7 +72,7 @@ fn num(v: &Value, k: &str) -> f64 {
 /// The summary lines of `paper` and `run`.
 pub fn summary_lines(s: &Value) -> Vec<String> {
     let w = num(s, "energy_window");
-    vec![
+    let mut lines = vec![
         format!(
             "static tip deflection      {:.3} mm",
             1e3 * num(s, "static_tip_deflection")
@@ -96,7 +96,25 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
             1e3 * num(s, "ball_energy_first"),
             1e3 * num(s, "ball_energy_last")
         ),
-    ]
+    ];
+    if let Some(c) = s.get("contact").filter(|c| c.is_object()) {
+        lines.push(format!(
+            "track contact              N < 0 (the track pulls: a real ball would leave it) {:.1} % of the time ({:.1} % for t ≥ {} s), min N = {:.2} m_b g",
+            100.0 * num(c, "track_pulls_fraction"),
+            100.0 * num(c, "track_pulls_fraction_steady"),
+            num(s, "steady_from"),
+            num(c, "normal_force_min_over_weight"),
+        ));
+        lines.push(format!(
+            "rolling without slip       needs more friction than μ = {} {:.1} % of the time ({:.1} % for t ≥ {} s; peak |F_t|/N {:.3e})",
+            num(c, "friction"),
+            100.0 * num(c, "slip_fraction"),
+            100.0 * num(c, "slip_fraction_steady"),
+            num(s, "steady_from"),
+            num(c, "required_friction_max")
+        ));
+    }
+    lines
 }
 
 /// Runs a scene, feeding every row to `each` (fixed memory); returns the summary.
@@ -108,7 +126,16 @@ fn stream(
     mut each: impl FnMut(&crate::run::Row) -> Result<()>,
 ) -> Result<Value> {
     let steps = s.steps();
-    let mut stats = RunStats::new(steps as f64 * s.file.integrator.step, steady_from);
+    let p = s.params()?;
+    let ball = s.file.kind.free_ball().then(|| {
+        (
+            p.ball.mass * p.gravity,
+            p.ball.stop_angle,
+            s.file.ball.friction,
+        )
+    });
+    let mut stats =
+        RunStats::new(steps as f64 * s.file.integrator.step, steady_from).with_ball(ball);
     let pb = progress_bar(steps as u64, what);
     let r = simulate_with(
         s,

@@ -1330,6 +1330,43 @@ impl FullSolver {
         Ok(-ev.lambda_local[5])
     }
 
+    /// The track's force on the ball at the current state, `(N, F_t)` \[N\] (normal along the
+    /// inward normal, tangential along increasing θ: `absorber_core::ContactForces`), from the
+    /// Lagrange multipliers of the augmented system: the circle constraint `c₄ = |R_b − r_A| − ρ`
+    /// gives `N = λ₄` and the no-slip constraint `c₅` (and, for a ball held on a stop, the lock
+    /// `c₆ = θ − ψ − α`) `F_t = −λ₅ − λ₆/ρ` — an independent route to the core's Newton–Euler
+    /// formula. `None` without a free ball.
+    pub fn contact_forces(&self) -> Option<(f64, f64)> {
+        if !self.scene.free_ball() {
+            return None;
+        }
+        let s = &self.state;
+        let mode = self.mode(s.contact);
+        let qi = self.gather_ind(&s.q, mode);
+        let vi = self.gather_ind(&s.v, mode);
+        let ai = self.gather_ind(&s.a, mode);
+        let mut warm = self.local_of(&s.q);
+        let ev = self
+            .evaluate(
+                &mut lock(&self.work).mass,
+                None,
+                &qi,
+                &vi,
+                &ai,
+                self.effective_gravity(s.base_accel),
+                mode,
+                &mut warm,
+                s.theta_ref,
+            )
+            .ok()?;
+        let l = &ev.lambda_local;
+        let lock_term = match mode {
+            Mode::Held(_) => l[5] / self.params.ball.path_radius(),
+            _ => 0.0,
+        };
+        Some((l[3], -l[4] - lock_term))
+    }
+
     /// Advances one step to the input `base_accel` = ÿ_b(t + h). On error the state is kept.
     pub fn step(&mut self, base_accel: f64) -> Result<StepReport<f64>, Error> {
         if !base_accel.is_finite() {
@@ -1679,6 +1716,10 @@ impl Simulator for FullSolver {
             ball_relative_angle: th - psi,
             ball_relative_rate: thd - psid,
         }
+    }
+
+    fn contact_forces(&self) -> Option<(f64, f64)> {
+        FullSolver::contact_forces(self)
     }
 
     fn energies(&self, base_velocity: f64, base_displacement: f64) -> Energies<f64> {

@@ -1,0 +1,104 @@
+//! The track's force on the ball (`absorber_core::ContactForces`): the core's Newton–Euler
+//! formula against closed forms and against the full solver's Lagrange multipliers (an
+//! independent route: `FullSolver::contact_forces`).
+
+use absorber_core::{FreeBallModel, Params};
+use host_sim::full::{FullSolver, SceneKind};
+
+fn weight(p: &Params<f64>) -> f64 {
+    p.ball.mass * p.gravity
+}
+
+/// At rest, ball plumb: N = m_b g and F_t = 0 in both solvers, to the static solve's Newton
+/// residue (1e-8 m_b g; measured 5.5e-9), and the two solvers to 1e-10 m_b g of each other.
+#[test]
+fn at_rest_the_track_carries_the_weight() {
+    let mut p = Params::<f64>::default();
+    p.ball.initial_angle = 0.0;
+    let core = FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0).unwrap();
+    let full = FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0).unwrap();
+    let c = core.contact_forces().unwrap();
+    let (n, t) = full.contact_forces().unwrap();
+    let w = weight(&p);
+    println!(
+        "core N/mg - 1 = {:e}, F_t/mg = {:e}; full {:e}, {:e}",
+        c.normal / w - 1.0,
+        c.tangential / w,
+        n / w - 1.0,
+        t / w
+    );
+    for (n, t) in [(c.normal, c.tangential), (n, t)] {
+        assert!((n / w - 1.0).abs() < 1e-8 && (t / w).abs() < 1e-8);
+    }
+    assert!((c.normal - n).abs() < 1e-10 * w && (c.tangential - t).abs() < 1e-10 * w);
+}
+
+/// A ball released at rest 30° from plumb in a housing that cannot move: N = m_b g cos θ₀ and,
+/// rolling without slip, F_t = (J_b/r_b²)/(m_b + J_b/r_b²) · m_b g sin θ₀ (= 2/7 m_b g sin θ₀
+/// for Table 1's ball, a solid sphere). At release the housing's acceleration is set by its
+/// mass, not its stiffness (the elastic forces have not changed yet): with the paper's tip
+/// mass the ball's reaction accelerates the end by 1.5 m/s² and N is 8 % off. So the beam and
+/// the tip are made 10⁴ times heavier and stiffer; the housing then accelerates by ~10⁻⁴ m/s²,
+/// hence the budget 1e-4 m_b g (measured: 8e-6). Both solvers.
+#[test]
+fn released_ball_matches_the_rigid_housing_closed_form() {
+    let mut p = Params::<f64>::default();
+    p.beam.modulus *= 1e4;
+    p.beam.mass *= 1e4;
+    p.tip.mass *= 1e4;
+    p.tip.inertia *= 1e4;
+    p.ball.initial_angle = 30f64.to_radians();
+    let core = FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0).unwrap();
+    let c = core.contact_forces().unwrap();
+    let full = FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0).unwrap();
+    let (fn_, ft) = full.contact_forces().unwrap();
+    let w = weight(&p);
+    let b = &p.ball;
+    let jr = b.inertia / (b.radius * b.radius);
+    let th = 30f64.to_radians();
+    let n_exact = w * th.cos();
+    let t_exact = jr / (b.mass + jr) * w * th.sin();
+    println!(
+        "N/mg {:.6} (closed form {:.6}), F_t/mg {:.6} ({:.6})",
+        c.normal / w,
+        n_exact / w,
+        c.tangential / w,
+        t_exact / w
+    );
+    for (n, t) in [(c.normal, c.tangential), (fn_, ft)] {
+        assert!((n - n_exact).abs() < 1e-4 * w, "N/mg {}", n / w);
+        assert!((t - t_exact).abs() < 1e-4 * w, "F_t/mg {}", t / w);
+    }
+}
+
+/// The paper scene at 4.10 Hz, where the track pulls: core (Newton–Euler on the Newmark
+/// accelerations) and full solver (multipliers of the augmented system at the same state)
+/// over the first 2.5 s, before the first impact (chaos separates the two afterwards). They
+/// differ by the Newton residue of the accelerations (the tolerance bounds βh²Δq̈ ≤ tol·L, so
+/// Δq̈ may reach 1.1 m/s², 0.1 g, though Newton's last correction leaves far less): budget
+/// 1e-3 m_b g; measured 6.6e-5.
+#[test]
+fn core_and_full_solver_agree_on_the_normal_force() {
+    let p = Params::<f64>::default();
+    let mut core = FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0).unwrap();
+    let mut full = FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0).unwrap();
+    let h = p.integrator.step;
+    let w = 2.0 * std::f64::consts::PI * 4.10;
+    let mut worst: f64 = 0.0;
+    let mut min_n = f64::INFINITY;
+    for k in 1..=((2.5 / h) as usize) {
+        let u = -0.5e-3 * w * w * (w * k as f64 * h).sin();
+        let rc = core.step(u).unwrap();
+        let rf = full.step(u).unwrap();
+        assert!(
+            rc.impact.is_none() && rf.impact.is_none(),
+            "impact at step {k}"
+        );
+        let c = core.contact_forces().unwrap();
+        let (n, _) = full.contact_forces().unwrap();
+        worst = worst.max((c.normal - n).abs() / weight(&p));
+        min_n = min_n.min(c.normal / weight(&p));
+    }
+    println!("max |N_core − N_full| = {worst:.3e} m_b g; min N = {min_n:.3} m_b g");
+    assert!(worst < 1e-3, "{worst}");
+}
