@@ -127,13 +127,11 @@ fn stream(
 ) -> Result<Value> {
     let steps = s.steps();
     let p = s.params()?;
-    let ball = s.file.kind.free_ball().then(|| {
-        (
-            p.ball.mass * p.gravity,
-            p.ball.stop_angle,
-            s.file.ball.friction,
-        )
-    });
+    let ball = s.file.kind.free_ball().then_some((
+        p.ball.mass * p.gravity,
+        p.ball.stop_angle,
+        s.file.ball.friction,
+    ));
     let mut stats =
         RunStats::new(steps as f64 * s.file.integrator.step, steady_from).with_ball(ball);
     let pb = progress_bar(steps as u64, what);
