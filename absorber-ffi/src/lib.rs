@@ -714,6 +714,7 @@ unsafe fn value<'a, M>(slot: *mut Head) -> &'a mut M {
 impl Scalar for f32 {
     const MONITOR_TAG: u32 = 32;
     #[inline]
+    #[allow(unused_unsafe, unused_variables)] // when no variant of this scalar is compiled in
     unsafe fn erased<'a>(slot: *mut Head, tag: u32) -> Option<&'a mut dyn Erased<f32>> {
         // SAFETY (every arm): the tag was written together with a value of that variant.
         unsafe {
@@ -735,6 +736,7 @@ impl Scalar for f32 {
 impl Scalar for f64 {
     const MONITOR_TAG: u32 = 64;
     #[inline]
+    #[allow(unused_unsafe, unused_variables)] // when no variant of this scalar is compiled in
     unsafe fn erased<'a>(slot: *mut Head, tag: u32) -> Option<&'a mut dyn Erased<f64>> {
         // SAFETY: as for f32.
         unsafe {
