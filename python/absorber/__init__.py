@@ -49,6 +49,8 @@ __all__ = [
     "sweep",
 ]
 
+AbsorberError.field = None  # the class default; set on each error that is about one field
+
 #: A scene: a built-in name, a TOML file path, or a dict of scene keys.
 SceneLike = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 

@@ -30,14 +30,18 @@ fn field_of(message: &str) -> Option<String> {
     parts.next().map(str::to_string)
 }
 
-fn to_py(e: anyhow::Error) -> PyErr {
-    let message = format!("{e:#}");
-    let err = AbsorberError::new_err(message.clone());
+/// An `AbsorberError` with its `field` attribute set from the message.
+fn error(message: String) -> PyErr {
+    let field = field_of(&message);
+    let err = AbsorberError::new_err(message);
     Python::attach(|py| {
-        let field = field_of(&message);
         let _ = err.value(py).setattr("field", field);
     });
     err
+}
+
+fn to_py(e: anyhow::Error) -> PyErr {
+    error(format!("{e:#}"))
 }
 
 /// A Python value of a scene dictionary as TOML.
@@ -65,9 +69,11 @@ fn toml_value(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
         return Ok(toml::Value::Array(a));
     }
     if v.hasattr("__fspath__")? {
-        return Ok(toml::Value::String(v.call_method0("__fspath__")?.extract()?));
+        return Ok(toml::Value::String(
+            v.call_method0("__fspath__")?.extract()?,
+        ));
     }
-    Err(AbsorberError::new_err(format!(
+    Err(error(format!(
         "invalid value for `{key}`: a {} cannot go into a scene (use numbers, strings, booleans, lists, dicts)",
         v.get_type().name()?
     )))
@@ -94,7 +100,7 @@ fn toml_table(d: &Bound<'_, PyDict>, prefix: &str) -> PyResult<toml::Table> {
 fn load_scene(scene: &Bound<'_, PyAny>) -> PyResult<Scene> {
     if let Ok(d) = scene.cast::<PyDict>() {
         let text = toml::to_string(&toml_table(d, "")?)
-            .map_err(|e| AbsorberError::new_err(format!("scene dictionary: {e}")))?;
+            .map_err(|e| error(format!("scene dictionary: {e}")))?;
         return Scene::from_toml(&text).map_err(to_py);
     }
     let spec: String = if scene.is_instance_of::<PyString>() {
@@ -112,13 +118,13 @@ fn load_scene(scene: &Bound<'_, PyAny>) -> PyResult<Scene> {
 fn parse_enum<E: clap::ValueEnum>(v: &Bound<'_, PyAny>, key: &str) -> PyResult<E> {
     let s: String = v
         .extract()
-        .map_err(|_| AbsorberError::new_err(format!("invalid value for `{key}`: not a string")))?;
+        .map_err(|_| error(format!("invalid value for `{key}`: not a string")))?;
     E::from_str(&s, true).map_err(|_| {
         let allowed: Vec<String> = E::value_variants()
             .iter()
             .filter_map(|x| x.to_possible_value().map(|p| p.get_name().to_string()))
             .collect();
-        AbsorberError::new_err(format!(
+        error(format!(
             "invalid value for `{key}`: {s:?} (allowed: {})",
             allowed.join(", ")
         ))
@@ -127,7 +133,9 @@ fn parse_enum<E: clap::ValueEnum>(v: &Bound<'_, PyAny>, key: &str) -> PyResult<E
 
 fn number<T: for<'a, 'py> FromPyObject<'a, 'py>>(v: &Bound<'_, PyAny>, key: &str) -> PyResult<T> {
     v.extract::<T>().map_err(|_| {
-        AbsorberError::new_err(format!("invalid value for `{key}`: {v} (not a number of the right kind)"))
+        error(format!(
+            "invalid value for `{key}`: {v} (not a number of the right kind)"
+        ))
     })
 }
 
@@ -149,7 +157,7 @@ fn scene_with(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -
                 "duration" => a.duration = Some(number(&v, &k)?),
                 "step" => a.step = Some(number(&v, &k)?),
                 other => {
-                    return Err(AbsorberError::new_err(format!(
+                    return Err(error(format!(
                         "invalid value for `{other}`: unknown override (allowed: solver, kind, elements, \
                          precision, frequency, amplitude, duration, step; other scene keys go in a scene dict)"
                     )))
@@ -175,7 +183,12 @@ fn run<'py>(
     overrides: Option<&Bound<'py, PyDict>>,
     transient: Option<f64>,
     every: Option<usize>,
-) -> PyResult<(Vec<&'static str>, Vec<Bound<'py, PyArray1<f64>>>, String, Vec<String>)> {
+) -> PyResult<(
+    Vec<&'static str>,
+    Vec<Bound<'py, PyArray1<f64>>>,
+    String,
+    Vec<String>,
+)> {
     let s = scene_with(scene, overrides)?;
     let w = warnings(&s);
     let (rows, summary) = py
@@ -256,7 +269,10 @@ fn _absorber(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("CSV_COLUMNS", host_sim::run::csv_columns())?;
     m.add(
         "BUILT_IN_SCENES",
-        host_sim::scene::BUILT_IN.iter().copied().collect::<Vec<_>>(),
+        host_sim::scene::BUILT_IN
+            .iter()
+            .copied()
+            .collect::<Vec<_>>(),
     )?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(static_summary, m)?)?;
