@@ -267,13 +267,7 @@ fn scene_toml(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -
 fn _absorber(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("AbsorberError", m.py().get_type::<AbsorberError>())?;
     m.add("CSV_COLUMNS", host_sim::run::csv_columns())?;
-    m.add(
-        "BUILT_IN_SCENES",
-        host_sim::scene::BUILT_IN
-            .iter()
-            .copied()
-            .collect::<Vec<_>>(),
-    )?;
+    m.add("BUILT_IN_SCENES", host_sim::scene::BUILT_IN.to_vec())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(static_summary, m)?)?;
     m.add_function(wrap_pyfunction!(modes, m)?)?;
