@@ -18,7 +18,9 @@ if ! python3 -c 'import venv, ensurepip' 2>/dev/null; then
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends python3-venv
 fi
 
-cargo build -q --release -p host-sim
+# The CLI (the reference) and the extension in one invocation: their shared dependencies are then
+# built once, with the same features, and the wheel build below reuses them.
+cargo build -q --release -p host-sim -p absorber-python
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 python3 -m venv "$work/venv"
