@@ -134,7 +134,12 @@ pub struct SceneArgs {
 impl SceneArgs {
     /// Loads the scene and applies the overrides.
     pub fn load(&self) -> Result<Scene> {
-        let mut s = Scene::load(&self.scene)?;
+        self.apply(Scene::load(&self.scene)?)
+    }
+
+    /// Applies the overrides to a loaded scene (`self.scene` is not read) and validates it
+    /// (the Python package applies its keyword overrides through this).
+    pub fn apply(&self, mut s: Scene) -> Result<Scene> {
         let f = &mut s.file;
         if let Some(v) = self.solver {
             f.solver = v;

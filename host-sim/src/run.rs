@@ -108,11 +108,21 @@ pub const CSV_HEADER: &str = "\
 # tangential_force: track on ball along increasing theta [N] (friction rolling needs; plus a stop's reaction)
 t,base_y,tip_y,tip_deflection,tip_angle,ball_angle,ball_rel_angle,beam_strain,beam_kinetic,beam_potential,tip_kinetic,tip_potential,ball_kinetic,ball_potential,iterations,impact,base_accel,tip_velocity,tip_rate,ball_rate,ball_rel_rate,ball_spin,ball_spin_rate,normal_force,tangential_force";
 
+/// Names of the CSV columns, in order (the last line of [`CSV_HEADER`]).
+pub fn csv_columns() -> Vec<&'static str> {
+    CSV_HEADER
+        .lines()
+        .last()
+        .unwrap_or_default()
+        .split(',')
+        .collect()
+}
+
 impl Row {
-    /// The row as a CSV line (no newline).
-    pub fn csv(&self) -> String {
+    /// The row's values in the order of [`csv_columns`] (`iterations` and `impact` as numbers).
+    pub fn values(&self) -> [f64; 25] {
         let e = &self.energies;
-        let v = [
+        [
             self.t,
             self.base_y,
             self.tip_y,
@@ -127,14 +137,8 @@ impl Row {
             e.tip_potential,
             e.ball_kinetic,
             e.ball_potential,
-        ];
-        let mut s: String = v
-            .iter()
-            .map(|x| format!("{x:.9e}"))
-            .collect::<Vec<_>>()
-            .join(",");
-        s.push_str(&format!(",{},{}", self.iterations, u8::from(self.impact)));
-        for x in [
+            f64::from(self.iterations),
+            f64::from(u8::from(self.impact)),
             self.base_accel,
             self.tip_velocity,
             self.tip_rate,
@@ -144,8 +148,22 @@ impl Row {
             self.ball_spin_rate,
             self.normal_force,
             self.tangential_force,
-        ] {
-            s.push_str(&format!(",{x:.9e}"));
+        ]
+    }
+
+    /// The row as a CSV line (no newline): [`Row::values`], `iterations` and `impact` as
+    /// integers, everything else with 10 significant digits.
+    pub fn csv(&self) -> String {
+        let mut s = String::with_capacity(25 * 17);
+        for (i, x) in self.values().iter().enumerate() {
+            if i > 0 {
+                s.push(',');
+            }
+            match i {
+                14 => s.push_str(&self.iterations.to_string()),
+                15 => s.push_str(if self.impact { "1" } else { "0" }),
+                _ => s.push_str(&format!("{x:.9e}")),
+            }
         }
         s
     }

@@ -3,19 +3,38 @@
 use super::{describe, load};
 use crate::cli::{InfoArgs, ModesArgs, TuneArgs};
 use crate::output::{OutputDir, Status};
+use crate::scene::Scene;
 use crate::tune::tune;
 use anyhow::{bail, Result};
 use serde_json::json;
 
+/// What `static --json` prints: scene, kind, elements, solver and the static tip deflection \[m\].
+pub fn static_summary(s: &Scene) -> Result<serde_json::Value> {
+    let sim = crate::run::build_simulator(s, 0.0)?;
+    let d = sim.static_tip_deflection();
+    Ok(
+        json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "static_tip_deflection": d }),
+    )
+}
+
+/// The `count` lowest natural frequencies of the linearized model at the static equilibrium \[Hz\]
+/// (what `modes` prints).
+pub fn lowest_frequencies(s: &Scene, count: usize) -> Result<Vec<f64>> {
+    let sim = crate::run::build_simulator(s, 0.0)?;
+    let f = sim
+        .natural_frequencies()
+        .map_err(|e| crate::scene::map_core_error(e, s))?;
+    Ok(f.into_iter().take(count).collect())
+}
+
 pub fn static_cmd(a: &InfoArgs) -> Result<()> {
     let s = load(&a.scene)?;
-    let sim = crate::run::build_simulator(&s, 0.0)?;
-    let d = sim.static_tip_deflection();
+    let summary = static_summary(&s)?;
+    let d = summary["static_tip_deflection"]
+        .as_f64()
+        .unwrap_or(f64::NAN);
     if a.json {
-        println!(
-            "{}",
-            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "static_tip_deflection": d })
-        );
+        println!("{summary}");
     } else {
         println!("{}", describe(&s));
         println!("static tip deflection: {d:.6e} m ({:.3} mm)", d * 1e3);
@@ -26,10 +45,7 @@ pub fn static_cmd(a: &InfoArgs) -> Result<()> {
 pub fn modes(a: &ModesArgs) -> Result<()> {
     let s = load(&a.scene)?;
     let sim = crate::run::build_simulator(&s, 0.0)?;
-    let f = sim
-        .natural_frequencies()
-        .map_err(|e| crate::scene::map_core_error(e, &s))?;
-    let f: Vec<f64> = f.into_iter().take(a.count).collect();
+    let f = lowest_frequencies(&s, a.count)?;
     let p = s.params()?;
     // Damping per mode: the structure's (C = c K: ζ = c ω / 2) and the integrator's own.
     let structural: Vec<f64> = f

@@ -8,6 +8,10 @@ mod info;
 mod run;
 mod sweep;
 
+pub use info::{lowest_frequencies, static_summary};
+pub use run::run_in_memory;
+pub use sweep::sweep_in_memory;
+
 use crate::cli::{Cli, Command, PaperArgs, SceneArgs};
 use crate::scene::{ExcitationType, Precision, Scene};
 use anyhow::Result;

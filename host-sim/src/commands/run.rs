@@ -197,14 +197,17 @@ pub fn paper_lines(s: &Scene, freqs: &[f64], free: &Value, locked: Option<&Value
     out
 }
 
-pub fn run(a: &RunArgs) -> Result<()> {
-    let t0 = Instant::now();
-    let s = load(&a.scene)?;
-    let f = &s.file;
+/// What `run` checks before it computes: the excitation (a CSV record is read here), the
+/// start of the steady-state window and the CSV row interval.
+fn plan(
+    s: &Scene,
+    transient: Option<f64>,
+    every: Option<usize>,
+) -> Result<(Excitation, f64, usize)> {
     // The excitation (a CSV record) is read and checked before anything else.
-    let exc = scene_excitation(&s)?;
-    let from = steady_start(a.transient, &s)?;
-    let every = a.every.unwrap_or(f.outputs.every);
+    let exc = scene_excitation(s)?;
+    let from = steady_start(transient, s)?;
+    let every = every.unwrap_or(s.file.outputs.every);
     if every == 0 {
         bail!("invalid value for `--every`: 0 (must be at least 1)");
     }
@@ -217,6 +220,41 @@ pub fn run(a: &RunArgs) -> Result<()> {
             (steps as u64).div_ceil(MAX_CSV_ROWS - 1)
         );
     }
+    Ok((exc, from, every))
+}
+
+/// `run` in memory instead of files (the Python package's `run`): the rows the CSV would hold
+/// (every `every`-th step, default `outputs.every`) and the summary `run --json` prints, from
+/// the same checks and the same streamed computation as the command.
+pub fn run_in_memory(
+    s: &Scene,
+    transient: Option<f64>,
+    every: Option<usize>,
+) -> Result<(Vec<crate::run::Row>, Value)> {
+    let (exc, from, every) = plan(s, transient, every)?;
+    let mut rows = Vec::new();
+    rows.try_reserve(s.steps() / every + 1).map_err(|_| {
+        anyhow::anyhow!(
+            "a run of {} rows does not fit in memory here",
+            s.steps() / every + 1
+        )
+    })?;
+    let mut k = 0u64;
+    let sum = stream(s, &exc, from, "run", |r| {
+        if k.is_multiple_of(every as u64) {
+            rows.push(*r);
+        }
+        k += 1;
+        Ok(())
+    })?;
+    Ok((rows, sum))
+}
+
+pub fn run(a: &RunArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let s = load(&a.scene)?;
+    let f = &s.file;
+    let (exc, from, every) = plan(&s, a.transient, a.every)?;
     let plots = if a.no_plots {
         Vec::new()
     } else {

@@ -4,17 +4,16 @@ use super::{check_excitations, describe, load, pool, progress_bar};
 use crate::cli::SweepArgs;
 use crate::output::{command_line, with_output, OutputDir, PointsFailed, Status};
 use crate::plot::{render, Panel, Series};
+use crate::scene::Scene;
 use crate::sweep::{sweep, SweepPoint, PAPER_FREQUENCIES};
 use anyhow::{bail, Result};
 use serde_json::json;
 use std::time::Instant;
 
-pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
-    let s = load(&a.scene)?;
-    let freqs = a
-        .freqs
-        .clone()
-        .unwrap_or_else(|| PAPER_FREQUENCIES.to_vec());
+/// What `sweep` checks before it computes: a harmonic scene, the frequencies (default: the
+/// paper's) against the step, and the window `last`; returns the frequencies.
+fn check(s: &Scene, freqs: Option<&[f64]>, last: f64) -> Result<Vec<f64>> {
+    let freqs = freqs.map_or_else(|| PAPER_FREQUENCIES.to_vec(), <[f64]>::to_vec);
     if s.file.excitation.kind != crate::scene::ExcitationType::Harmonic {
         bail!("sweep needs a harmonic excitation (the scene has type = \"csv\")");
     }
@@ -27,14 +26,33 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         "--amplitude",
     )?;
     let duration = s.steps() as f64 * h;
-    if !a.last.is_finite() || a.last < 10.0 * h || a.last >= duration {
+    if !last.is_finite() || last < 10.0 * h || last >= duration {
         bail!(
-            "invalid value for `--last`: {} (the steady-state window must hold at least 10 steps, \
+            "invalid value for `--last`: {last} (the steady-state window must hold at least 10 steps, \
              {} s, and be shorter than the run, {duration} s)",
-            a.last,
             10.0 * h
         );
     }
+    Ok(freqs)
+}
+
+/// `sweep` in memory (the Python package's `sweep`): the same checks and the same parallel runs
+/// on `jobs` threads (default: all cores), one point per frequency (failed points carry their
+/// error).
+pub fn sweep_in_memory(
+    s: &Scene,
+    freqs: Option<&[f64]>,
+    last: f64,
+    jobs: Option<usize>,
+) -> Result<Vec<SweepPoint>> {
+    let freqs = check(s, freqs, last)?;
+    let pool = pool(jobs)?;
+    pool.install(|| sweep(s, &freqs, last, &|_| {}))
+}
+
+pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
+    let s = load(&a.scene)?;
+    let freqs = check(&s, a.freqs.as_deref(), a.last)?;
     let pool = pool(a.jobs)?;
     let dir = a
         .out

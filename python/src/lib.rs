@@ -1,0 +1,277 @@
+//! `absorber._absorber`: the native half of the Python package `absorber`.
+//!
+//! Thin on purpose: every function loads the scene the way the command line does
+//! (`host_sim::scene::Scene::load`, `SceneArgs::apply` for the overrides) and calls the same
+//! library function as the command (`host_sim::commands::run_in_memory`, `static_summary`,
+//! `lowest_frequencies`, `sweep_in_memory`), so Python and the CLI give the same numbers. The
+//! typed, documented API is `absorber/__init__.py`; errors become `absorber.AbsorberError`
+//! (a `ValueError`) with the offending field in its `field` attribute.
+
+use host_sim::cli::SceneArgs;
+use host_sim::commands;
+use host_sim::scene::Scene;
+use numpy::PyArray1;
+use pyo3::create_exception;
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+create_exception!(
+    _absorber,
+    AbsorberError,
+    PyValueError,
+    "A bad scene, parameter or option (`field` names it when there is one), or a run that failed."
+);
+
+/// The first `quoted` name in a message (`invalid value for `beam.modulus`: …`).
+fn field_of(message: &str) -> Option<String> {
+    let mut parts = message.split('`');
+    parts.next()?;
+    parts.next().map(str::to_string)
+}
+
+/// An `AbsorberError` with its `field` attribute set from the message.
+fn error(message: String) -> PyErr {
+    let field = field_of(&message);
+    let err = AbsorberError::new_err(message);
+    Python::attach(|py| {
+        let _ = err.value(py).setattr("field", field);
+    });
+    err
+}
+
+fn to_py(e: anyhow::Error) -> PyErr {
+    error(format!("{e:#}"))
+}
+
+/// A Python value of a scene dictionary as TOML.
+fn toml_value(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+    if v.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(v.extract()?));
+    }
+    if v.is_instance_of::<PyInt>() {
+        return Ok(toml::Value::Integer(v.extract()?));
+    }
+    if v.is_instance_of::<PyFloat>() {
+        return Ok(toml::Value::Float(v.extract()?));
+    }
+    if v.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(v.extract()?));
+    }
+    if let Ok(d) = v.cast::<PyDict>() {
+        return Ok(toml::Value::Table(toml_table(d, key)?));
+    }
+    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+        let mut a = Vec::new();
+        for x in v.try_iter()? {
+            a.push(toml_value(&x?, key)?);
+        }
+        return Ok(toml::Value::Array(a));
+    }
+    if v.hasattr("__fspath__")? {
+        return Ok(toml::Value::String(
+            v.call_method0("__fspath__")?.extract()?,
+        ));
+    }
+    Err(error(format!(
+        "invalid value for `{key}`: a {} cannot go into a scene (use numbers, strings, booleans, lists, dicts)",
+        v.get_type().name()?
+    )))
+}
+
+fn toml_table(d: &Bound<'_, PyDict>, prefix: &str) -> PyResult<toml::Table> {
+    let mut t = toml::Table::new();
+    for (k, v) in d.iter() {
+        let k: String = k
+            .extract()
+            .map_err(|_| PyTypeError::new_err("scene dictionary keys must be strings"))?;
+        let path = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        t.insert(k, toml_value(&v, &path)?);
+    }
+    Ok(t)
+}
+
+/// A scene from a built-in name, a TOML path (str or os.PathLike) or a dict of scene keys (the
+/// TOML file's, unset keys at the paper's values).
+fn load_scene(scene: &Bound<'_, PyAny>) -> PyResult<Scene> {
+    if let Ok(d) = scene.cast::<PyDict>() {
+        let text = toml::to_string(&toml_table(d, "")?)
+            .map_err(|e| error(format!("scene dictionary: {e}")))?;
+        return Scene::from_toml(&text).map_err(to_py);
+    }
+    let spec: String = if scene.is_instance_of::<PyString>() {
+        scene.extract()?
+    } else if scene.hasattr("__fspath__")? {
+        scene.call_method0("__fspath__")?.extract()?
+    } else {
+        return Err(PyTypeError::new_err(
+            "scene must be a built-in name (\"paper\"), a path to a TOML file or a dict",
+        ));
+    };
+    Scene::load(&spec).map_err(to_py)
+}
+
+fn parse_enum<E: clap::ValueEnum>(v: &Bound<'_, PyAny>, key: &str) -> PyResult<E> {
+    let s: String = v
+        .extract()
+        .map_err(|_| error(format!("invalid value for `{key}`: not a string")))?;
+    E::from_str(&s, true).map_err(|_| {
+        let allowed: Vec<String> = E::value_variants()
+            .iter()
+            .filter_map(|x| x.to_possible_value().map(|p| p.get_name().to_string()))
+            .collect();
+        error(format!(
+            "invalid value for `{key}`: {s:?} (allowed: {})",
+            allowed.join(", ")
+        ))
+    })
+}
+
+fn number<T: for<'a, 'py> FromPyObject<'a, 'py>>(v: &Bound<'_, PyAny>, key: &str) -> PyResult<T> {
+    v.extract::<T>().map_err(|_| {
+        error(format!(
+            "invalid value for `{key}`: {v} (not a number of the right kind)"
+        ))
+    })
+}
+
+/// The scene with the command line's overrides (`solver`, `kind`, `elements`, `precision`,
+/// `frequency`, `amplitude`, `duration`, `step`), validated.
+fn scene_with(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -> PyResult<Scene> {
+    let s = load_scene(scene)?;
+    let mut a = SceneArgs::default();
+    if let Some(o) = overrides {
+        for (k, v) in o.iter() {
+            let k: String = k.extract()?;
+            match k.as_str() {
+                "solver" => a.solver = Some(parse_enum(&v, &k)?),
+                "kind" => a.kind = Some(parse_enum(&v, &k)?),
+                "precision" => a.precision = Some(parse_enum(&v, &k)?),
+                "elements" => a.elements = Some(number(&v, &k)?),
+                "frequency" => a.frequency = Some(number(&v, &k)?),
+                "amplitude" => a.amplitude = Some(number(&v, &k)?),
+                "duration" => a.duration = Some(number(&v, &k)?),
+                "step" => a.step = Some(number(&v, &k)?),
+                other => {
+                    return Err(error(format!(
+                        "invalid value for `{other}`: unknown override (allowed: solver, kind, elements, \
+                         precision, frequency, amplitude, duration, step; other scene keys go in a scene dict)"
+                    )))
+                }
+            }
+        }
+    }
+    a.apply(s).map_err(to_py)
+}
+
+/// The scene's warnings (poorly resolved excitation), as the command line prints them.
+fn warnings(s: &Scene) -> Vec<String> {
+    s.warnings()
+}
+
+/// `run`: (column names, columns, summary JSON, warnings).
+#[pyfunction]
+#[pyo3(signature = (scene, overrides=None, transient=None, every=None))]
+#[allow(clippy::type_complexity)]
+fn run<'py>(
+    py: Python<'py>,
+    scene: &Bound<'py, PyAny>,
+    overrides: Option<&Bound<'py, PyDict>>,
+    transient: Option<f64>,
+    every: Option<usize>,
+) -> PyResult<(
+    Vec<&'static str>,
+    Vec<Bound<'py, PyArray1<f64>>>,
+    String,
+    Vec<String>,
+)> {
+    let s = scene_with(scene, overrides)?;
+    let w = warnings(&s);
+    let (rows, summary) = py
+        .detach(|| commands::run_in_memory(&s, transient, every))
+        .map_err(to_py)?;
+    let names = host_sim::run::csv_columns();
+    let mut columns = vec![Vec::with_capacity(rows.len()); names.len()];
+    for r in &rows {
+        for (c, x) in columns.iter_mut().zip(r.values()) {
+            c.push(x);
+        }
+    }
+    let arrays = columns
+        .into_iter()
+        .map(|c| PyArray1::from_vec(py, c))
+        .collect();
+    Ok((names, arrays, summary.to_string(), w))
+}
+
+/// `static`: the summary JSON of `static --json`.
+#[pyfunction]
+#[pyo3(signature = (scene, overrides=None))]
+fn static_summary(
+    py: Python<'_>,
+    scene: &Bound<'_, PyAny>,
+    overrides: Option<&Bound<'_, PyDict>>,
+) -> PyResult<String> {
+    let s = scene_with(scene, overrides)?;
+    py.detach(|| commands::static_summary(&s))
+        .map(|v| v.to_string())
+        .map_err(to_py)
+}
+
+/// `modes`: the lowest `count` natural frequencies \[Hz\].
+#[pyfunction]
+#[pyo3(signature = (scene, overrides=None, count=4))]
+fn modes<'py>(
+    py: Python<'py>,
+    scene: &Bound<'py, PyAny>,
+    overrides: Option<&Bound<'py, PyDict>>,
+    count: usize,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let s = scene_with(scene, overrides)?;
+    let f = py
+        .detach(|| commands::lowest_frequencies(&s, count))
+        .map_err(to_py)?;
+    Ok(PyArray1::from_vec(py, f))
+}
+
+/// `sweep`: the points as JSON (one object per frequency, `error` set on a failed one).
+#[pyfunction]
+#[pyo3(signature = (scene, overrides=None, freqs=None, last=20.0, jobs=None))]
+fn sweep(
+    py: Python<'_>,
+    scene: &Bound<'_, PyAny>,
+    overrides: Option<&Bound<'_, PyDict>>,
+    freqs: Option<Vec<f64>>,
+    last: f64,
+    jobs: Option<usize>,
+) -> PyResult<String> {
+    let s = scene_with(scene, overrides)?;
+    let points = py
+        .detach(|| commands::sweep_in_memory(&s, freqs.as_deref(), last, jobs))
+        .map_err(to_py)?;
+    serde_json::to_string(&points).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// The scene as TOML text (after the overrides): what a scene file for it would hold.
+#[pyfunction]
+#[pyo3(signature = (scene, overrides=None))]
+fn scene_toml(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -> PyResult<String> {
+    scene_with(scene, overrides)?.to_toml().map_err(to_py)
+}
+
+#[pymodule]
+fn _absorber(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("AbsorberError", m.py().get_type::<AbsorberError>())?;
+    m.add("CSV_COLUMNS", host_sim::run::csv_columns())?;
+    m.add("BUILT_IN_SCENES", host_sim::scene::BUILT_IN.to_vec())?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(static_summary, m)?)?;
+    m.add_function(wrap_pyfunction!(modes, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(scene_toml, m)?)?;
+    Ok(())
+}
