@@ -60,7 +60,8 @@ pub use energy::Energies;
 pub use error::Error;
 pub use model::{Contact, Impact, Model, Side, State, StepReport};
 pub use params::{
-    BallParams, BeamParams, Damping, ImpactModel, Integrator, NewtonKind, Params, TipParams,
+    BallParams, BeamParams, Calibration, Damping, ImpactModel, Integrator, NewtonKind, Params,
+    TipParams,
 };
 pub use scalar::Real;
 pub use scene::{BallKind, BeamOnly, FreeBall, FreeBallNoStops, LockedBall, Scene, TipMass};
