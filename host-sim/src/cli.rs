@@ -341,6 +341,11 @@ pub struct FatigueArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub jobs: Option<usize>,
+    /// Also run the scene's model calibrated against the full solver with this many elements
+    /// (as `calibrate` does) and the core with that many elements (3, 8 or 16), and write their
+    /// damage rates side by side (`fatigue_calibrated.csv`, `fatigue_calibrated.png`).
+    #[arg(long)]
+    pub calibrate_against: Option<usize>,
     /// Output directory for fatigue.csv and fatigue.png (default: the scene's `outputs.directory`).
     #[arg(long, short)]
     pub out: Option<PathBuf>,

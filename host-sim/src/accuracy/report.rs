@@ -284,7 +284,11 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         })
         .collect();
     // 3. Candidates (in parallel), 4. timing (sequential, after).
-    let cands = candidates();
+    let mut cands = candidates();
+    // The calibrated models (issue 12), fitted to the converged full solver (N = 16).
+    for n in [2, 3, 4, 6] {
+        cands.push(calibrated(Config::DEFAULT.with(|c| c.elements = n), 16)?);
+    }
     let jobs: Vec<(usize, usize)> = (0..cands.len())
         .flat_map(|c| (0..all.len()).map(move |s| (c, s)))
         .collect();
