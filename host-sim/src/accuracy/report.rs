@@ -665,7 +665,13 @@ impl Ctx {
                 .with(|c| c.newton = Newton::Modified),
             d.with(|c| c.elements = 6).with(|c| c.f32 = false),
         ];
-        for c in list {
+        // The calibrated candidates (their factors are fitted, so found by their flag).
+        let calibrated = self
+            .rows
+            .iter()
+            .filter(|r| r.cfg.calibration.is_some())
+            .map(|r| r.cfg);
+        for c in list.into_iter().chain(calibrated) {
             if let Some(i) = find(c) {
                 let r = &self.rows[i];
                 writeln!(
