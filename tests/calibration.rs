@@ -31,8 +31,10 @@ fn calibration_n3() -> Calibration<f64> {
 /// N = 3 is +0.92 % in f₁, +2.4 % in f₂ and −0.79 % in sag.
 #[test]
 fn calibrated_n3_matches_full_solver_n16_f1_f2_within_0_05_percent_sag_within_0_1_percent() {
-    let mut p = Params::<f64>::default();
-    p.calibration = calibration_n3();
+    let p = Params::<f64> {
+        calibration: calibration_n3(),
+        ..Default::default()
+    };
     let core = LockedBallModel::<f64, 3, 12>::at_rest(p, 0.0).expect("core");
     let f = core.natural_frequencies().expect("modes");
     let sag = core.static_tip_deflection();
@@ -69,8 +71,10 @@ fn calibrated_n3_matches_full_solver_n16_f1_f2_within_0_05_percent_sag_within_0_
 /// `tol·L / 100` = 3.65e-8 m (the same budget as the uncalibrated test, and why).
 #[test]
 fn calibrated_full_solver_agrees_with_calibrated_core() {
-    let mut p = Params::<f64>::default();
-    p.calibration = calibration_n3();
+    let p = Params::<f64> {
+        calibration: calibration_n3(),
+        ..Default::default()
+    };
     let mut core = Model::<f64, LockedBall, 3, 12>::at_rest(p, 0.0).expect("core");
     let mut full = FullSolver::at_rest(p, SceneKind::LockedBall, 3, 0.0).expect("full");
     let (fc, ff) = (
@@ -259,8 +263,10 @@ fn bad_calibration_is_an_error_naming_the_field() {
             },
         ),
     ] {
-        let mut p = Params::<f64>::default();
-        p.calibration = c;
+        let p = Params::<f64> {
+            calibration: c,
+            ..Default::default()
+        };
         match LockedBallModel::<f64, 3, 12>::at_rest(p, 0.0) {
             Err(absorber_core::Error::InvalidParameter { field: f, .. }) => assert_eq!(f, field),
             other => panic!("{field}: {:?}", other.map(|_| ())),

@@ -398,7 +398,7 @@ pub struct IdentifyArgs {
     pub record: crate::identify::RecordKind,
     /// Frequency band to look for the mode in, `lo,hi` [Hz] (default 0.1 Hz … a quarter of the
     /// sampling rate).
-    #[arg(long, value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub band: Option<Vec<f64>>,
     /// Write the result as TOML here (for `calibrate --from-identified`).
     #[arg(long, short)]

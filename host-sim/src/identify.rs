@@ -25,9 +25,11 @@
 //! **Uncertainty** (1σ): the fit's standard errors, `s² (JᵀJ)⁻¹` with the residual variance
 //! `s²`, inflated by `f_s / (2B)` (the band-passed noise is correlated over 1/(2B); B = the
 //! passband width), combined in quadrature with half the difference between the fits of the
-//! first and the second half of the window (or, ambient, of the random decrements of the two
-//! halves of the record), which catches what the model leaves out: amplitude-dependent
-//! frequency and damping, a neighbouring mode, drift.
+//! first and the second half of the window, which catches what the model leaves out:
+//! amplitude-dependent frequency and damping, a neighbouring mode, drift. Ambient: the standard
+//! error of the mean of the random decrements of 8 blocks of the record (the scatter of the
+//! random excitation, which dominates there: ζ from random decrement scatters by ±20 % at
+//! ~1000 triggers).
 
 use anyhow::{bail, Context, Result};
 use rustfft::{num_complex::Complex, FftPlanner};
@@ -500,16 +502,35 @@ pub fn identify(
                 ((e0 / e1).ln() / (TAU * fp * (len * 3 / 4) as f64 * dt)).clamp(1e-4, 0.3)
             };
             let all = fit_decay(&rd, dt, fp, zeta0)?;
-            let half = y.len() / 2;
-            let (ra, _) = random_decrement(&y[..half], len)?;
-            let (rb, _) = random_decrement(&y[half..], len)?;
-            let a = fit_decay(&ra, dt, all.f, all.zeta)?;
-            let b = fit_decay(&rb, dt, all.f, all.zeta)?;
+            // Scatter of the estimate: random decrements of K blocks of the record; the
+            // standard error of their mean, s/√K (K = 8, or fewer for a short record).
+            let mut blocks = Vec::new();
+            for k in (2..=8).rev() {
+                let size = y.len() / k;
+                let fits: Result<Vec<DecayFit>> = (0..k)
+                    .map(|i| {
+                        let (r, _) = random_decrement(&y[i * size..(i + 1) * size], len)?;
+                        fit_decay(&r, dt, all.f, all.zeta)
+                    })
+                    .collect();
+                if let Ok(f) = fits {
+                    blocks = f;
+                    break;
+                }
+            }
+            let sem = |v: &dyn Fn(&DecayFit) -> f64| -> f64 {
+                let k = blocks.len() as f64;
+                if k < 2.0 {
+                    return f64::INFINITY;
+                }
+                let mean = blocks.iter().map(v).sum::<f64>() / k;
+                (blocks.iter().map(|b| (v(b) - mean).powi(2)).sum::<f64>() / (k - 1.0) / k).sqrt()
+            };
             Ok(Identified {
                 f1: all.f,
-                f1_uncertainty: (all.sigma.0 * inflate).hypot(0.5 * (a.f - b.f)),
+                f1_uncertainty: (all.sigma.0 * inflate).hypot(sem(&|b| b.f)),
                 zeta: all.zeta,
-                zeta_uncertainty: (all.sigma.1 * inflate).hypot(0.5 * (a.zeta - b.zeta)),
+                zeta_uncertainty: (all.sigma.1 * inflate).hypot(sem(&|b| b.zeta)),
                 record: kind,
                 column: column.into(),
                 window: (0.0, len as f64 * dt),
@@ -550,6 +571,55 @@ mod tests {
         assert!((id.f1 / f - 1.0).abs() < 5e-4, "{id:?}");
         assert!((id.zeta / z - 1.0).abs() < 0.1, "{id:?}");
         assert!(id.f1_uncertainty > 0.0 && id.zeta_uncertainty > 0.0);
+    }
+
+    /// Ambient record: a 1 Hz, ζ = 1 % oscillator under white-noise force (2000 s at 50 Hz,
+    /// semi-implicit Euler with 10 substeps, whose own frequency and damping errors are below
+    /// 0.1 %), its acceleration identified by random decrement. Budgets: f within 0.5 %; both
+    /// f and ζ within 3σ of the uncertainty the tool states (its contract), plus 0.1 %. ζ itself
+    /// is only as good as random decrement on 2000 s of record: measured +20 % at this seed
+    /// (+4 % with another), which the stated uncertainty must cover; the 10 % ζ budget of
+    /// issue 12 is for free decays (tests/calibration.rs: −0.3 %).
+    #[test]
+    fn ambient_response_is_identified_by_random_decrement() {
+        let (f, z, dt, sub) = (1.0, 0.01, 0.02, 10);
+        let w = TAU * f;
+        let h = dt / sub as f64;
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut x, mut v) = (0.0, 0.0);
+        let mut acc = Vec::with_capacity(100_000);
+        for _ in 0..100_000 {
+            // Box–Muller: a standard normal force for this sample.
+            let (u1, u2) = (uniform().max(1e-300), uniform());
+            let n = (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos();
+            for _ in 0..sub {
+                v += h * (n - 2.0 * z * w * v - w * w * x);
+                x += h * v;
+            }
+            acc.push(n - 2.0 * z * w * v - w * w * x);
+        }
+        let rec = Record {
+            dt,
+            t0: 0.0,
+            x: acc,
+        };
+        let id = identify(&rec, RecordKind::Ambient, Some((0.5, 2.0)), "acc").unwrap();
+        assert!(id.triggers > 500, "{id:?}");
+        assert!((id.f1 / f - 1.0).abs() < 5e-3, "{id:?}");
+        assert!(
+            (id.f1 - f).abs() < 3.0 * id.f1_uncertainty + 1e-3 * f,
+            "{id:?}"
+        );
+        assert!(
+            (id.zeta - z).abs() < 3.0 * id.zeta_uncertainty + 1e-3 * z,
+            "{id:?}"
+        );
     }
 
     /// Bad CSV input is an error naming the column or line, never a panic.
