@@ -13,6 +13,7 @@
 //! This module is the single source of truth for the element integrals: the embedded model
 //! (`absorber-core`) and the full solver (`host-sim`) both call it.
 
+use crate::params::{BeamParams, Calibration};
 use crate::scalar::{lit, Real};
 use nalgebra::{SMatrix, SVector, Vector2};
 
@@ -112,6 +113,18 @@ fn kron_i2<T: Real>(a: &SMatrix<T, 4, 4>) -> ElementMatrix<T> {
 }
 
 impl<T: Real> Element<T> {
+    /// One of `n` equal elements of the beam `b`: length L/n, E·a and E·I times the calibration's
+    /// factors ([`Calibration`]; 1 = the paper's element, bit for bit), ρa = m/L. The core and
+    /// the full solver both build their element here.
+    pub fn of_beam(b: &BeamParams<T>, calibration: &Calibration<T>, n: usize) -> Self {
+        Self {
+            length: b.length / lit::<T>(n as f64),
+            axial_rigidity: b.modulus * b.area * calibration.axial_stiffness,
+            bending_rigidity: b.modulus * b.inertia * calibration.bending_stiffness,
+            mass_per_length: b.mass / b.length,
+        }
+    }
+
     /// Element mass `ρ a l` \[kg\].
     pub fn mass(&self) -> T {
         self.mass_per_length * self.length
@@ -141,6 +154,30 @@ impl<T: Real> Element<T> {
             f(4.0) * l * l,
         ) * c;
         kron_i2(&a)
+    }
+
+    /// HRZ-lumped mass matrix (Hinton, Rock & Zienkiewicz 1976): the diagonal of the
+    /// consistent one scaled so that the translations carry the element mass,
+    /// `ρ a l · diag(½, l²/78, ½, l²/78) ⊗ I₂` (positive definite: the slopes keep a rotary
+    /// mass, unlike a plain row-sum lumping, which leaves them massless).
+    pub fn lumped_mass_matrix(&self) -> ElementMatrix<T> {
+        let l = self.length;
+        let m = self.mass_per_length * l;
+        let (half, rot) = (m * lit::<T>(0.5), m * l * l / lit::<T>(78.0));
+        kron_i2(&SMatrix::<T, 4, 4>::from_diagonal(&nalgebra::Vector4::new(
+            half, rot, half, rot,
+        )))
+    }
+
+    /// Blend of the consistent and the HRZ-lumped mass, `(1 − μ) M_c + μ M_l` (μ =
+    /// `lumping` ∈ \[0, 1\]; μ = 0 returns [`Element::mass_matrix`] bit for bit). Both have the
+    /// element's mass in translation, so the blend keeps it.
+    pub fn blended_mass_matrix(&self, lumping: T) -> ElementMatrix<T> {
+        let consistent = self.mass_matrix();
+        if lumping == T::zero() {
+            return consistent;
+        }
+        consistent * (T::one() - lumping) + self.lumped_mass_matrix() * lumping
     }
 
     /// Constant bending stiffness `K_t = ∫ EI S″ᵀ S″ dx` (eq. 13 with κ = |r″|, eq. 11),

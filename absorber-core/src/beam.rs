@@ -62,7 +62,13 @@ pub fn gather<T: Real, const D: usize>(x: &SVector<T, D>, k: usize) -> ElementVe
 impl<T: Real> Beam<T> {
     /// The beam of `n` uniform elements of `element`, with damping coefficient `damping` \[s\].
     pub fn new(element: Element<T>, damping: T) -> Self {
-        let mass = element.mass_matrix();
+        Self::with_lumping(element, damping, T::zero())
+    }
+
+    /// As [`Beam::new`], with the mass matrix [`Element::blended_mass_matrix`] of lumped
+    /// fraction `lumping` (a calibration; 0 = the consistent mass).
+    pub fn with_lumping(element: Element<T>, damping: T, lumping: T) -> Self {
+        let mass = element.blended_mass_matrix(lumping);
         let stiffness = element.bending_stiffness();
         let mut mass4 = [[T::zero(); 4]; 4];
         let mut stiffness4 = [[T::zero(); 4]; 4];

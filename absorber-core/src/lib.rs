@@ -61,7 +61,8 @@ pub use error::Error;
 pub use model::{Contact, Impact, Model, Side, State, StepReport};
 pub use outputs::ContactForces;
 pub use params::{
-    BallParams, BeamParams, Damping, ImpactModel, Integrator, NewtonKind, Params, TipParams,
+    BallParams, BeamParams, Calibration, Damping, ImpactModel, Integrator, NewtonKind, Params,
+    TipParams,
 };
 pub use scalar::Real;
 pub use scene::{BallKind, BeamOnly, FreeBall, FreeBallNoStops, LockedBall, Scene, TipMass};

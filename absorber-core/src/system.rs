@@ -87,14 +87,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
 
     /// Precomputes the fixed data from validated parameters.
     pub(crate) fn new(params: Params<T>) -> Self {
-        let n: T = lit(N as f64);
         let b = &params.beam;
-        let element = crate::ancf::Element {
-            length: b.length / n,
-            axial_rigidity: b.modulus * b.area,
-            bending_rigidity: b.modulus * b.inertia,
-            mass_per_length: b.mass / b.length,
-        };
+        // The calibration's factors are folded in here, once (the step never sees them).
+        let element = crate::ancf::Element::of_beam(b, &params.calibration, N);
         let mut scale = SVector::<T, D>::from_element(T::one());
         for node in 0..N {
             for c in 0..2 {
@@ -105,7 +100,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         Self {
             inertia: TipInertia::new(&params, S::HAS_TIP, S::BALL),
-            beam: Beam::new(element, params.damping.stiffness_proportional),
+            beam: Beam::with_lumping(
+                element,
+                params.damping.stiffness_proportional,
+                params.calibration.mass_lumping,
+            ),
             params,
             equilibrium: SVector::zeros(),
             scale,

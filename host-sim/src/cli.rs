@@ -80,6 +80,15 @@ pub enum Command {
     /// Writes docs/accuracy.md: error of embedded configurations (elements, step, precision,
     /// Newton budget) against a converged full-solver reference, and their run time.
     Accuracy(crate::accuracy::AccuracyArgs),
+    /// Fits the calibration of an N-element model (factors on E·I and E·a, lumped mass
+    /// fraction) to the converged full solver (f₁, f₂ with the ball locked, the free-ball beam
+    /// mode, the static sag) or to a measured pole (`--target-f1`/`--target-zeta`,
+    /// `--from-identified`); prints the residuals and writes a complete scene file.
+    Calibrate(CalibrateArgs),
+    /// Identifies the first pole f₁, ζ₁ with uncertainties from a measured record (free decay
+    /// or ambient response) in a CSV; prints it and writes it as TOML for `calibrate
+    /// --from-identified`.
+    Identify(IdentifyArgs),
     /// Writes docs/validation.md: every quantitative claim of the paper beside this model's
     /// numbers (3 elements and a converged mesh), with verdicts, reasons and figures.
     Validation(ValidationArgs),
@@ -340,12 +349,71 @@ pub struct FatigueArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub jobs: Option<usize>,
+    /// Also run the scene's model calibrated against the full solver with this many elements
+    /// (as `calibrate` does) and the core with that many elements (3, 8 or 16), and write their
+    /// damage rates side by side (`fatigue_calibrated.csv`, `fatigue_calibrated.png`).
+    #[arg(long)]
+    pub calibrate_against: Option<usize>,
     /// Output directory for fatigue.csv and fatigue.png (default: the scene's `outputs.directory`).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
     /// Skip the PNG.
     #[arg(long)]
     pub no_plots: bool,
+}
+
+/// `calibrate`.
+#[derive(Args, Debug)]
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The calibrated scene file to write (TOML; `run`, `sweep`, `modes`, `static`, `fatigue`
+    /// take it as is).
+    #[arg(long, short)]
+    pub out: PathBuf,
+    /// Elements of the converged full-solver reference.
+    #[arg(long, default_value_t = 16)]
+    pub reference_elements: usize,
+    /// Measured first beam frequency [Hz]: fit E·I to it (after the converged calibration).
+    #[arg(long, allow_negative_numbers = true)]
+    pub target_f1: Option<f64>,
+    /// Measured first-mode damping ratio [-]: set the scene's damping (and, if its integrator
+    /// alone damps more, a lower Newmark γ) so that the discrete mode has it.
+    #[arg(long, allow_negative_numbers = true)]
+    pub target_zeta: Option<f64>,
+    /// The TOML written by `identify` (its f1 and zeta as the targets).
+    #[arg(long, conflicts_with_all = ["target_f1", "target_zeta"])]
+    pub from_identified: Option<PathBuf>,
+    /// Machine-readable output (JSON on stdout).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `identify`.
+#[derive(Args, Debug)]
+pub struct IdentifyArgs {
+    /// Measured record: CSV with a header row of column names (`#` comment lines allowed).
+    #[arg(long)]
+    pub csv: PathBuf,
+    /// Column to identify (acceleration, velocity or displacement of the tip or root).
+    #[arg(long, default_value = "tip_acceleration")]
+    pub column: String,
+    /// Time column [s] (uniformly sampled).
+    #[arg(long, default_value = "t")]
+    pub time_column: String,
+    /// Free decay or ambient response (random decrement first).
+    #[arg(long, value_enum, default_value_t = crate::identify::RecordKind::Decay)]
+    pub record: crate::identify::RecordKind,
+    /// Frequency band to look for the mode in, `lo,hi` [Hz] (default 0.1 Hz … a quarter of the
+    /// sampling rate).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub band: Option<Vec<f64>>,
+    /// Write the result as TOML here (for `calibrate --from-identified`).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Machine-readable output (JSON on stdout).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Runs the parsed command line.

@@ -5,8 +5,9 @@
 use crate::scene::{Kind, Precision};
 use crate::sim::{Observation, Simulator};
 use absorber_core::{
-    BallParams, BeamOnly, BeamParams, Damping, Energies, Error, FreeBall, FreeBallNoStops, Impact,
-    Integrator, LockedBall, Model, Params, Real, Scene, StepReport, TipMass, TipParams,
+    BallParams, BeamOnly, BeamParams, Calibration, Damping, Energies, Error, FreeBall,
+    FreeBallNoStops, Impact, Integrator, LockedBall, Model, Params, Real, Scene, StepReport,
+    TipMass, TipParams,
 };
 
 /// A core model of any scene, size and scalar.
@@ -165,6 +166,11 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             stiffness_proportional: p.damping.stiffness_proportional as f32,
         },
         gravity: p.gravity as f32,
+        calibration: Calibration {
+            bending_stiffness: p.calibration.bending_stiffness as f32,
+            axial_stiffness: p.calibration.axial_stiffness as f32,
+            mass_lumping: p.calibration.mass_lumping as f32,
+        },
     }
 }
 

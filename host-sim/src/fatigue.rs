@@ -139,7 +139,7 @@ fn locked_of<const N: usize>(
 ) -> RunFatigue {
     crate::with_elements!(
         N,
-        [3, 8],
+        [3, 8, 16],
         0,
         run_one[LockedBall](params, config, exc, steps),
         unreachable_count(N)
@@ -147,7 +147,7 @@ fn locked_of<const N: usize>(
 }
 
 fn unreachable_count(n: usize) -> RunFatigue {
-    RunFatigue::failed(format!("fatigue supports 3 or 8 elements (got {n})"))
+    RunFatigue::failed(format!("fatigue supports 3, 8 or 16 elements (got {n})"))
 }
 
 fn run_pair(
@@ -159,10 +159,10 @@ fn run_pair(
 ) -> Result<(RunFatigue, RunFatigue)> {
     Ok(crate::with_elements!(
         elements,
-        [3, 8],
+        [3, 8, 16],
         1,
         pair[](params, config, exc, steps),
-        bail!("invalid value for `elements`: {elements} (fatigue supports 3 or 8)")
+        bail!("invalid value for `elements`: {elements} (fatigue supports 3, 8 or 16)")
     ))
 }
 
@@ -239,6 +239,77 @@ pub fn csv(points: &[FatiguePoint], category: &str, moment: &str) -> String {
             p.free.impacts,
             p.free.overflows,
             p.locked.overflows,
+        ));
+    }
+    s
+}
+
+/// The damage rate of the scene's model beside its calibrated twin and a converged mesh, per
+/// frequency (issue 12): `model` = the scene's N elements as given, `calibrated` = N elements
+/// with the calibration fitted to the full solver, `converged` = the core with M elements,
+/// uncalibrated.
+#[derive(Clone, Debug, Serialize)]
+pub struct Comparison {
+    /// The scene's model.
+    pub model: FatiguePoint,
+    /// Calibrated.
+    pub calibrated: FatiguePoint,
+    /// Converged mesh.
+    pub converged: FatiguePoint,
+}
+
+impl Comparison {
+    /// The free ball of the converged run reached the stops: its motion is chaotic, and damage
+    /// rates of different models are then statistics of different trajectories.
+    pub fn free_chaotic(&self) -> bool {
+        self.converged.free.impacts > 0 || self.calibrated.free.impacts > 0
+    }
+
+    /// Any run failed.
+    pub fn failed(&self) -> bool {
+        self.model.failed() || self.calibrated.failed() || self.converged.failed()
+    }
+}
+
+/// Ratio `a / b` of two damage rates (NaN when b is 0 or either is not finite).
+pub fn ratio(a: f64, b: f64) -> f64 {
+    if a.is_finite() && b.is_finite() && b > 0.0 {
+        a / b
+    } else {
+        f64::NAN
+    }
+}
+
+/// CSV of a comparison (damage rates per hour and their ratios to the converged mesh).
+pub fn comparison_csv(rows: &[Comparison], n: usize, m: usize) -> String {
+    let mut s = format!(
+        "# host-sim fatigue --calibrate-against {m}: damage rate [1/h] of the {n}-element model as given, calibrated ({n} elements, fitted to the full solver with {m}), and the core with {m} elements\n\
+         # ratio_* = damage rate / the {m}-element one; free_chaotic = 1 when the free ball reached the stops (then its damage rate is a statistic of a chaotic run)\n\
+         frequency,amplitude,status,locked_model,locked_calibrated,locked_converged,locked_ratio_model,locked_ratio_calibrated,free_model,free_calibrated,free_converged,free_ratio_model,free_ratio_calibrated,free_chaotic\n"
+    );
+    for c in rows {
+        let (f, a) = (c.converged.frequency, c.converged.amplitude);
+        if c.failed() {
+            s.push_str(&format!("{f},{a},failed,,,,,,,,,,,\n"));
+            continue;
+        }
+        let (lm, lc, lr) = (
+            c.model.locked.damage_rate,
+            c.calibrated.locked.damage_rate,
+            c.converged.locked.damage_rate,
+        );
+        let (fm, fc, fr) = (
+            c.model.free.damage_rate,
+            c.calibrated.free.damage_rate,
+            c.converged.free.damage_rate,
+        );
+        s.push_str(&format!(
+            "{f},{a},ok,{lm:.6e},{lc:.6e},{lr:.6e},{:.4},{:.4},{fm:.6e},{fc:.6e},{fr:.6e},{:.4},{:.4},{}\n",
+            ratio(lm, lr),
+            ratio(lc, lr),
+            ratio(fm, fr),
+            ratio(fc, fr),
+            u8::from(c.free_chaotic())
         ));
     }
     s

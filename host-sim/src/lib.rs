@@ -3,7 +3,7 @@
 //! Layout (dependencies point down only):
 //! - [`cli`] (options) → [`commands`] (what each command does);
 //! - the studies: [`stability`], [`accuracy`], [`validation`] (they write docs/), [`fatigue`],
-//!   [`sweep`], [`tune`];
+//!   [`sweep`], [`tune`], [`calibrate`], [`identify`];
 //! - running a scene: [`scene`], [`excitation`], [`run`] (streamed), [`figures`], [`plot`];
 //! - the solvers behind [`sim::Simulator`]: [`core_sim`] (the embedded core; N is picked at
 //!   compile time by the one macro [`with_elements!`]) and [`full`] (the full solver);
@@ -13,6 +13,7 @@ pub mod full;
 pub mod sim;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
 pub mod accuracy;
+pub mod calibrate;
 pub mod cli;
 pub mod commands;
 pub mod core_sim;
@@ -20,6 +21,7 @@ pub mod excitation;
 pub mod fatigue;
 pub mod fft;
 pub mod figures;
+pub mod identify;
 pub mod integrator;
 pub mod output;
 pub mod plot;

@@ -23,10 +23,13 @@
 //! [excitation] # type = "harmonic", amplitude [m], frequency [Hz]
 //!              # or type = "csv", file = "base.csv" (columns t [s], accel [m/s²])
 //! [outputs]    # directory, plots = ["time", "fft", "phase", "energy"], transient [s], every
+//! [calibration] # bending_stiffness, axial_stiffness [-] (factors on E·I, E·a), mass_lumping [-]
+//!              # (written by `host-sim calibrate`; left out: none, the paper's model)
 //! ```
 
 use absorber_core::{
-    BallParams, BeamParams, Damping, ImpactModel, Integrator, NewtonKind, Params, TipParams,
+    BallParams, BeamParams, Calibration, Damping, ImpactModel, Integrator, NewtonKind, Params,
+    TipParams,
 };
 use anyhow::{anyhow, bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -186,6 +189,51 @@ pub struct DampingSection {
     pub frequency: Option<f64>,
 }
 
+/// `[calibration]`: factors of the reduced beam ([`absorber_core::Calibration`]), written by
+/// `host-sim calibrate`. Left out (or all at their defaults): the paper's model.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CalibrationSection {
+    /// Factor on E·I \[-\] (1: none).
+    pub bending_stiffness: f64,
+    /// Factor on E·a \[-\] (1: none).
+    pub axial_stiffness: f64,
+    /// Lumped fraction of the element mass matrix \[-\] (0: consistent).
+    pub mass_lumping: f64,
+}
+
+impl Default for CalibrationSection {
+    fn default() -> Self {
+        Self::from(&Calibration::<f64>::default())
+    }
+}
+
+impl From<&Calibration<f64>> for CalibrationSection {
+    fn from(c: &Calibration<f64>) -> Self {
+        Self {
+            bending_stiffness: c.bending_stiffness,
+            axial_stiffness: c.axial_stiffness,
+            mass_lumping: c.mass_lumping,
+        }
+    }
+}
+
+impl CalibrationSection {
+    /// No calibration (the section is then not written).
+    pub fn is_identity(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// The core's calibration.
+    pub fn calibration(&self) -> Calibration<f64> {
+        Calibration {
+            bending_stiffness: self.bending_stiffness,
+            axial_stiffness: self.axial_stiffness,
+            mass_lumping: self.mass_lumping,
+        }
+    }
+}
+
 /// `[integrator]`.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
@@ -327,6 +375,9 @@ pub struct SceneFile {
     pub excitation: ExcitationSection,
     /// Outputs.
     pub outputs: OutputsSection,
+    /// Calibration of the reduced beam (`host-sim calibrate`; none by default).
+    #[serde(skip_serializing_if = "CalibrationSection::is_identity")]
+    pub calibration: CalibrationSection,
 }
 
 impl Default for BeamSection {
@@ -448,6 +499,7 @@ impl Default for SceneFile {
             integrator: IntegratorSection::default(),
             excitation: ExcitationSection::default(),
             outputs: OutputsSection::default(),
+            calibration: CalibrationSection::default(),
         }
     }
 }
@@ -660,6 +712,7 @@ impl Scene {
             },
             damping,
             gravity: f.gravity,
+            calibration: f.calibration.calibration(),
         };
         let has_tip = f.kind != Kind::Beam;
         p.validate(has_tip, f.kind.has_ball())
@@ -860,6 +913,9 @@ fn scene_key(field: &str, s: &Scene) -> (String, String) {
             format!("{:?}", f.damping.stiffness_proportional),
         ),
         "gravity" => (field.into(), v(f.gravity)),
+        "calibration.bending_stiffness" => (field.into(), v(f.calibration.bending_stiffness)),
+        "calibration.axial_stiffness" => (field.into(), v(f.calibration.axial_stiffness)),
+        "calibration.mass_lumping" => (field.into(), v(f.calibration.mass_lumping)),
         other => (other.into(), "?".into()),
     }
 }

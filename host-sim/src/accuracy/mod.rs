@@ -78,6 +78,8 @@ pub struct Config {
     pub tolerance: f64,
     /// Integrator rule.
     pub rule: Rule,
+    /// Calibration factors (bending, axial, lumped fraction; [`calibrated`]) or none.
+    pub calibration: Option<[f64; 3]>,
 }
 
 impl Config {
@@ -89,6 +91,7 @@ impl Config {
         newton: Newton::Converged,
         tolerance: 1e-5,
         rule: Rule::Matched,
+        calibration: None,
     };
 
     /// The same with other fields.
@@ -116,12 +119,17 @@ impl Config {
             Rule::Paper => " paper-γ",
         };
         format!(
-            "N{} h{} {} {}{}",
+            "N{} h{} {} {}{}{}",
             self.elements,
             hs,
             if self.f32 { "f32" } else { "f64" },
             n,
-            rule
+            rule,
+            if self.calibration.is_some() {
+                " calibrated"
+            } else {
+                ""
+            }
         )
     }
 
@@ -137,6 +145,13 @@ impl Config {
         p.integrator.step = self.step;
         p.integrator.tolerance = self.tolerance;
         p.damping.stiffness_proportional = c;
+        if let Some([bending, axial, lumping]) = self.calibration {
+            p.calibration = absorber_core::Calibration {
+                bending_stiffness: bending,
+                axial_stiffness: axial,
+                mass_lumping: lumping,
+            };
+        }
         match self.newton {
             Newton::Converged => {}
             Newton::Budget(k) => {
@@ -485,7 +500,24 @@ pub fn reference_config(n: usize, h: f64) -> Config {
         newton: Newton::Converged,
         tolerance: 1e-10,
         rule: Rule::Matched,
+        calibration: None,
     }
+}
+
+/// `cfg` with its element count calibrated by `host-sim calibrate`'s fit against the full
+/// solver with `reference` elements (Table 1, ball locked; f₁, f₂, the free-ball beam mode,
+/// the static sag).
+pub fn calibrated(cfg: Config, reference: usize) -> Result<Config> {
+    let mut scene = crate::scene::Scene::paper();
+    scene.file.kind = crate::scene::Kind::Locked;
+    let (r, free) = crate::calibrate::reference(&scene, reference)?;
+    let fit = crate::calibrate::fit(&scene, cfg.elements, &r, free)?;
+    let c = fit.calibration;
+    Ok(
+        cfg.with(|x| {
+            x.calibration = Some([c.bending_stiffness, c.axial_stiffness, c.mass_lumping])
+        }),
+    )
 }
 
 /// Version of the cached files (bump when the solver or the sampling changes).

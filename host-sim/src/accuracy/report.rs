@@ -284,7 +284,11 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         })
         .collect();
     // 3. Candidates (in parallel), 4. timing (sequential, after).
-    let cands = candidates();
+    let mut cands = candidates();
+    // The calibrated models (issue 12), fitted to the converged full solver (N = 16).
+    for n in [2, 3, 4, 6] {
+        cands.push(calibrated(Config::DEFAULT.with(|c| c.elements = n), 16)?);
+    }
     let jobs: Vec<(usize, usize)> = (0..cands.len())
         .flat_map(|c| (0..all.len()).map(move |s| (c, s)))
         .collect();
@@ -661,7 +665,13 @@ impl Ctx {
                 .with(|c| c.newton = Newton::Modified),
             d.with(|c| c.elements = 6).with(|c| c.f32 = false),
         ];
-        for c in list {
+        // The calibrated candidates (their factors are fitted, so found by their flag).
+        let calibrated = self
+            .rows
+            .iter()
+            .filter(|r| r.cfg.calibration.is_some())
+            .map(|r| r.cfg);
+        for c in list.into_iter().chain(calibrated) {
             if let Some(i) = find(c) {
                 let r = &self.rows[i];
                 writeln!(

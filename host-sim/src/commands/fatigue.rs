@@ -2,7 +2,7 @@
 
 use super::{check_excitations, load, pool};
 use crate::cli::{FatigueArgs, Moment};
-use crate::fatigue::{csv, fatigue_points, FatiguePoint};
+use crate::fatigue::{comparison_csv, csv, fatigue_points, ratio, Comparison, FatiguePoint};
 use crate::output::{command_line, with_output, OutputDir, PointsFailed, Status};
 use crate::plot::{render, Panel, Series};
 use crate::sweep::PAPER_FREQUENCIES;
@@ -38,11 +38,18 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
     if amps.iter().any(|&x| x <= 0.0) {
         anyhow::bail!("invalid value for `--amplitudes`: must be positive");
     }
-    if s.file.elements != 3 && s.file.elements != 8 {
+    if ![3, 8, 16].contains(&s.file.elements) {
         anyhow::bail!(
-            "invalid value for `elements`: {} (fatigue supports 3 or 8)",
+            "invalid value for `elements`: {} (fatigue supports 3, 8 or 16)",
             s.file.elements
         );
+    }
+    if let Some(m) = a.calibrate_against {
+        if ![3, 8, 16].contains(&m) {
+            anyhow::bail!(
+                "invalid value for `--calibrate-against`: {m} (fatigue supports 3, 8 or 16 elements)"
+            );
+        }
     }
     let detail = a.category.detail();
     let config = MonitorConfig {
@@ -67,7 +74,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
         s.file.duration,
         pool.current_num_threads()
     );
-    let ((points, csv_path, png), _files) = with_output(out, |out| {
+    let ((points, csv_path, png, comparison), _files) = with_output(out, |out| {
         let points = pool.install(|| {
             fatigue_points(
                 &params,
@@ -91,10 +98,46 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             );
             Some(out.write_with("fatigue.png", |p| plot(p, &title, &points, &amps))?)
         };
-        let failed = points.iter().filter(|p| p.failed()).count();
+        let mut failed = points.iter().filter(|p| p.failed()).count();
+        let mut comparison = None;
+        if let Some(m) = a.calibrate_against {
+            let n = s.file.elements;
+            let (reference, free) = crate::calibrate::reference(&s, m)?;
+            let fit = crate::calibrate::fit(&s, n, &reference, free)?;
+            let mut cal = params;
+            cal.calibration = fit.calibration;
+            let mut plain = params;
+            plain.calibration = absorber_core::Calibration::default();
+            let run = |p: &absorber_core::Params<f64>, k: usize| {
+                pool.install(|| fatigue_points(p, k, config, &freqs, &amps, s.file.duration))
+            };
+            let (calibrated, converged) = (run(&cal, n)?, run(&plain, m)?);
+            let rows: Vec<Comparison> = points
+                .iter()
+                .zip(calibrated)
+                .zip(converged)
+                .map(|((p, c), r)| Comparison {
+                    model: p.clone(),
+                    calibrated: c,
+                    converged: r,
+                })
+                .collect();
+            failed += rows.iter().filter(|c| c.failed()).count();
+            out.write("fatigue_calibrated.csv", &comparison_csv(&rows, n, m))?;
+            if !a.no_plots {
+                let title = format!(
+                    "Damage rate / {m} elements: {n} elements as given and calibrated ({} s runs)",
+                    s.file.duration
+                );
+                out.write_with("fatigue_calibrated.png", |p| {
+                    plot_comparison(p, &title, &rows, n)
+                })?;
+            }
+            comparison = Some((rows, fit.calibration, n, m));
+        }
         let status = Status::of_points(failed);
         let extra = json!({ "points": points.len(), "failed": failed });
-        Ok(((points, csv_path, png), status, extra))
+        Ok(((points, csv_path, png, comparison), status, extra))
     })?;
     let wall = t0.elapsed().as_secs_f64();
     println!(
@@ -128,6 +171,44 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             p.locked.equivalent_range / 1e6,
             p.free.impacts,
         );
+    }
+    if let Some((rows, c, n, m)) = &comparison {
+        println!(
+            "damage rate per hour: {n} elements as given, calibrated (bending {:.6}, axial {:.6}, lumping {:.6}; fitted to the full solver with {m}), core with {m}",
+            c.bending_stiffness, c.axial_stiffness, c.mass_lumping
+        );
+        println!("  f [Hz]   locked: N{n}       cal.       N{m}    cal./N{m}  N{n}/N{m}  | free: N{n}       cal.       N{m}    cal./N{m}");
+        for r in rows {
+            if r.failed() {
+                println!("  {:6.3}   FAILED", r.converged.frequency);
+                continue;
+            }
+            let (l, f) = (&r.converged.locked, &r.converged.free);
+            let free = if r.free_chaotic() {
+                format!(
+                    "{:10.3e} {:10.3e} {:10.3e}   (chaotic)",
+                    r.model.free.damage_rate, r.calibrated.free.damage_rate, f.damage_rate
+                )
+            } else {
+                format!(
+                    "{:10.3e} {:10.3e} {:10.3e}   {:6.3}",
+                    r.model.free.damage_rate,
+                    r.calibrated.free.damage_rate,
+                    f.damage_rate,
+                    ratio(r.calibrated.free.damage_rate, f.damage_rate)
+                )
+            };
+            println!(
+                "  {:6.3}   {:10.3e} {:10.3e} {:10.3e}   {:6.3}   {:6.3}  | {free}",
+                r.converged.frequency,
+                r.model.locked.damage_rate,
+                r.calibrated.locked.damage_rate,
+                l.damage_rate,
+                ratio(r.calibrated.locked.damage_rate, l.damage_rate),
+                ratio(r.model.locked.damage_rate, l.damage_rate),
+            );
+        }
+        println!("wrote {}", dir.join("fatigue_calibrated.csv").display());
     }
     println!("wrote {}", csv_path.display());
     if let Some(p) = &png {
@@ -226,5 +307,69 @@ fn plot(path: &std::path::Path, title: &str, points: &[FatiguePoint], amps: &[f6
         2,
         1,
         (1000, 900),
+    )
+}
+
+/// Damage-rate ratios to the converged mesh per frequency: locked ball (as given, calibrated),
+/// free ball calibrated where its motion is not chaotic.
+fn plot_comparison(
+    path: &std::path::Path,
+    title: &str,
+    rows: &[Comparison],
+    n: usize,
+) -> Result<()> {
+    let ok: Vec<&Comparison> = rows.iter().filter(|r| !r.failed()).collect();
+    let pts = |f: &dyn Fn(&Comparison) -> f64| -> Vec<(f64, f64)> {
+        ok.iter()
+            .map(|r| (r.converged.frequency, f(r)))
+            .filter(|p| p.1.is_finite())
+            .collect()
+    };
+    let series = vec![
+        Series::marked(
+            &format!("locked ball, N = {n} as given"),
+            pts(&|r| ratio(r.model.locked.damage_rate, r.converged.locked.damage_rate)),
+        )
+        .colored(2),
+        Series::marked(
+            &format!("locked ball, N = {n} calibrated"),
+            pts(&|r| {
+                ratio(
+                    r.calibrated.locked.damage_rate,
+                    r.converged.locked.damage_rate,
+                )
+            }),
+        )
+        .colored(LOCKED),
+        Series::marked(
+            &format!("free ball (no stop contact), N = {n} calibrated"),
+            pts(&|r| {
+                if r.free_chaotic() {
+                    f64::NAN
+                } else {
+                    ratio(r.calibrated.free.damage_rate, r.converged.free.damage_rate)
+                }
+            }),
+        )
+        .colored(FREE),
+    ];
+    let failed: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.failed())
+        .map(|r| r.converged.frequency)
+        .collect();
+    render(
+        path,
+        title,
+        &[Panel::new(
+            "Miner damage rate relative to the converged mesh",
+            "excitation frequency [Hz]",
+            "damage rate / converged",
+            series,
+        )
+        .with_failed(failed)],
+        1,
+        1,
+        (1000, 500),
     )
 }

@@ -2,6 +2,7 @@
 //! modules (`run`, `sweep`, `fatigue`, `tune`, and the studies `stability`, `accuracy`,
 //! `validation`); every file goes through [`crate::output`].
 
+mod calibrate;
 mod docs;
 mod fatigue;
 mod info;
@@ -36,6 +37,8 @@ pub fn dispatch(cli: Cli) -> Result<()> {
         Command::Stability(a) => docs::stability(&a),
         Command::Fatigue(a) => fatigue::run(&a),
         Command::Accuracy(a) => docs::accuracy(&a),
+        Command::Calibrate(a) => calibrate::calibrate(&a),
+        Command::Identify(a) => calibrate::identify(&a),
         Command::Validation(a) => docs::validation(&a),
     }
 }

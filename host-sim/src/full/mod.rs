@@ -250,12 +250,7 @@ impl FullSolver {
         params.validate(scene.has_tip(), scene.has_ball())?;
         let n = n_elements;
         let b = &params.beam;
-        let element = Element {
-            length: b.length / n as f64,
-            axial_rigidity: b.modulus * b.area,
-            bending_rigidity: b.modulus * b.inertia,
-            mass_per_length: b.mass / b.length,
-        };
+        let element = Element::of_beam(b, &params.calibration, n);
         let (mt, jt, d) = if scene.has_tip() {
             (params.tip.mass, params.tip.inertia, params.tip.offset)
         } else {
@@ -304,7 +299,7 @@ impl FullSolver {
             contact: Contact::Off,
             theta_ref: 0.0,
         };
-        let me = element.mass_matrix();
+        let me = element.blended_mass_matrix(params.calibration.mass_lumping);
         let mass = Self::mass_factor(n, n_body, &me, &bodies)?;
         Ok(Self {
             params,
