@@ -163,6 +163,39 @@ impl Config {
         p
     }
 
+    /// The arguments of `fw-cost` (absorber_firmware::cost) that run this configuration on the
+    /// paper scene (free ball, 4.13 Hz, 10 s) on the Cortex-M4F; `None` for an element count
+    /// the firmware does not build.
+    pub fn firmware_args(&self) -> Option<String> {
+        if ![1, 2, 3, 4, 6].contains(&self.elements) {
+            return None;
+        }
+        let p = self.params();
+        let i = &p.integrator;
+        let mut a = format!(
+            "kind=free elements={} precision={} step={:?} gamma={:?} beta={:?} damping={:?} tolerance={:?} newton={}",
+            self.elements,
+            if self.f32 { "f32" } else { "f64" },
+            i.step,
+            i.gamma,
+            i.beta,
+            p.damping.stiffness_proportional,
+            i.tolerance,
+            match i.newton {
+                NewtonKind::PerStep => "per-step",
+                NewtonKind::Full => "full",
+                NewtonKind::Modified => "modified",
+            }
+        );
+        if let Newton::Budget(k) = self.newton {
+            a.push_str(&format!(" budget={k}"));
+        }
+        if let Some([b, x, l]) = self.calibration {
+            a.push_str(&format!(" bending={b:?} axial={x:?} lumping={l:?}"));
+        }
+        Some(a)
+    }
+
     /// The precision as the scene's enum.
     pub fn precision(&self) -> Precision {
         if self.f32 {
@@ -685,6 +718,31 @@ pub fn compare(c: &Trajectory, r: &Trajectory, window: f64, last: f64) -> Errors
         impacts_per_s,
         ball_rms,
     }
+}
+
+/// Host time of `cfg` relative to `reference` on `scene`: the median of `repeats` ratios of
+/// runs taken in interleaved pairs (so that drifts of a shared machine cancel), which of the
+/// two runs first alternating from pair to pair (a warm cache favours the second) \[-\].
+pub fn paired_ratio(
+    cfg: &Config,
+    reference: &Config,
+    scene: &TestScene,
+    seconds: f64,
+    repeats: usize,
+) -> Result<f64> {
+    let mut v = Vec::new();
+    for k in 0..repeats.max(1) {
+        let (r, c) = if k % 2 == 0 {
+            let r = time_per_second(reference, scene, seconds, 1)?;
+            (r, time_per_second(cfg, scene, seconds, 1)?)
+        } else {
+            let c = time_per_second(cfg, scene, seconds, 1)?;
+            (time_per_second(reference, scene, seconds, 1)?, c)
+        };
+        v.push(c / r);
+    }
+    v.sort_by(f64::total_cmp);
+    Ok(v[v.len() / 2])
 }
 
 /// Median host time per simulated second of `cfg` on `scene` (`seconds` simulated per

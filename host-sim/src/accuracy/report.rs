@@ -24,6 +24,10 @@ pub struct AccuracyArgs {
     /// Timing repetitions per candidate (median).
     #[arg(long)]
     pub repeats: Option<usize>,
+    /// Print each candidate's label and its `fw-cost` arguments (tab-separated) and stop: the
+    /// list `scripts/accuracy-cost.sh` counts instructions for.
+    #[arg(long)]
+    pub firmware_configs: bool,
 }
 
 /// Sizes of one study.
@@ -148,6 +152,46 @@ struct Row {
     failures: Vec<Option<String>>,
     iterations_per_step: Vec<f64>,
     time: f64,
+    /// Host time over the default's, paired interleaved median.
+    ratio: f64,
+    /// Cortex-M4F instructions per simulated second (docs/accuracy-cost.json), if counted.
+    m4: Option<f64>,
+}
+
+/// Every candidate: [`candidates`] and the calibrated ones (fitted to the converged full
+/// solver, N = 16).
+fn all_candidates() -> Result<Vec<Config>> {
+    let mut cands = candidates();
+    for n in [2, 3, 4, 6] {
+        cands.push(calibrated(Config::DEFAULT.with(|c| c.elements = n), 16)?);
+    }
+    Ok(cands)
+}
+
+/// Instructions per step of each configuration on the Cortex-M4F, by label, from
+/// `docs/accuracy-cost.json` (written by `scripts/accuracy-cost.sh`; a configuration whose
+/// steps fail is costed over all its steps, failed ones included); checked against the
+/// arguments it was counted with, so a stale file cannot lend its numbers to a changed
+/// configuration.
+fn m4_costs() -> std::collections::HashMap<String, (String, f64)> {
+    let path = workspace_root().join("docs/accuracy-cost.json");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Default::default();
+    };
+    let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return Default::default();
+    };
+    v.as_object()
+        .map(|o| {
+            o.iter()
+                .filter_map(|(k, x)| {
+                    let args = x.get("args")?.as_str()?.to_string();
+                    let ips = x.get("instructions_per_step")?.as_f64()?;
+                    Some((k.clone(), (args, ips)))
+                })
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 /// Results of the convergence studies.
@@ -232,6 +276,14 @@ fn convergence(p: &Plan, cache: &Path) -> Result<Convergence> {
 
 /// Runs the study and writes the report.
 pub fn run(a: &AccuracyArgs) -> Result<()> {
+    if a.firmware_configs {
+        for c in all_candidates()? {
+            if let Some(args) = c.firmware_args() {
+                println!("{}\t{args}", c.label());
+            }
+        }
+        return Ok(());
+    }
     let started = Instant::now();
     let p = plan(a);
     let cache = a.cache.clone().unwrap_or_else(default_cache);
@@ -284,11 +336,8 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         })
         .collect();
     // 3. Candidates (in parallel), 4. timing (sequential, after).
-    let mut cands = candidates();
-    // The calibrated models (issue 12), fitted to the converged full solver (N = 16).
-    for n in [2, 3, 4, 6] {
-        cands.push(calibrated(Config::DEFAULT.with(|c| c.elements = n), 16)?);
-    }
+    // The calibrated models (issue 12) are fitted to the converged full solver (N = 16).
+    let cands = all_candidates()?;
     let jobs: Vec<(usize, usize)> = (0..cands.len())
         .flat_map(|c| (0..all.len()).map(move |s| (c, s)))
         .collect();
@@ -308,9 +357,23 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         .iter()
         .find(|s| s.name == "free-4.13")
         .expect("scene list");
+    let costs = m4_costs();
     let mut rows = Vec::new();
     for (c, cfg) in cands.iter().enumerate() {
         let time = time_per_second(cfg, timing_scene, p.timing_seconds, p.repeats)?;
+        let ratio = paired_ratio(
+            cfg,
+            &Config::DEFAULT,
+            timing_scene,
+            p.timing_seconds,
+            p.repeats,
+        )?;
+        let m4 = cfg.firmware_args().and_then(|args| {
+            costs
+                .get(&cfg.label())
+                .filter(|(a, _)| *a == args)
+                .map(|(_, ips)| ips / cfg.step)
+        });
         let mut errors = Vec::new();
         let mut failures = Vec::new();
         let mut its = Vec::new();
@@ -327,6 +390,8 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
             failures,
             iterations_per_step: its,
             time,
+            ratio,
+            m4,
         });
     }
     eprintln!(
@@ -417,6 +482,37 @@ fn sep(x: Option<f64>) -> String {
 }
 
 impl Ctx {
+    /// Every candidate has an exact Cortex-M4F count (else the cost axis is host time).
+    fn exact(&self) -> bool {
+        self.rows.iter().all(|r| r.m4.is_some())
+    }
+
+    /// The cost axis: millions of Cortex-M4F instructions per simulated second when every
+    /// candidate was counted, host µs per simulated second otherwise.
+    fn cost(&self, r: &Row) -> f64 {
+        if self.exact() {
+            r.m4.unwrap_or(f64::NAN) / 1e6
+        } else {
+            r.time * 1e6
+        }
+    }
+
+    fn cost_title(&self) -> &'static str {
+        if self.exact() {
+            "M4 instructions per simulated s [10⁶] (QEMU, exact)"
+        } else {
+            "host µs per simulated s (median)"
+        }
+    }
+
+    fn cost_cell(&self, r: &Row) -> String {
+        if self.exact() {
+            format!("{:.2}", self.cost(r))
+        } else {
+            format!("{:.0}", self.cost(r))
+        }
+    }
+
     fn idx(&self, name: &str) -> usize {
         self.all.iter().position(|s| s.name == name).expect("scene")
     }
@@ -517,7 +613,7 @@ impl Ctx {
         let pts: Vec<(f64, f64)> = self
             .rows
             .iter()
-            .map(|r| (r.time, pareto_error(r, self)))
+            .map(|r| (self.cost(r), pareto_error(r, self)))
             .collect();
         let front = pareto_front(&pts);
         writeln!(m, "## 3. Candidates: error and cost\n")?;
@@ -528,10 +624,10 @@ impl Ctx {
             self.idx("locked-noise"),
         );
         let f413 = self.idx("free-4.13");
-        writeln!(m, "| configuration | Pareto | host µs per simulated s | Newton it./step (free 4.13) | f₁ err [%] | locked 4.13: RMS / max tip err, 5 s [%] | locked 4.13: RMS / max, {0} s [%] | locked 4.13: amplitude err [%] | free 3.70: RMS / max tip, {0} s [%] | free 3.70: max θ err [mrad] | locked noise: RMS / max, {0} s [%] | free 4.13: max tip err before 1st impact [%] | free 4.13: separation [s] | E [%] |", p.duration)?;
+        writeln!(m, "| configuration | Pareto | {title} | host time × default (paired median) | Newton it./step (free 4.13) | f₁ err [%] | locked 4.13: RMS / max tip err, 5 s [%] | locked 4.13: RMS / max, {d} s [%] | locked 4.13: amplitude err [%] | free 3.70: RMS / max tip, {d} s [%] | free 3.70: max θ err [mrad] | locked noise: RMS / max, {d} s [%] | free 4.13: max tip err before 1st impact [%] | free 4.13: separation [s] | E [%] |", title = self.cost_title(), d = p.duration)?;
         writeln!(
             m,
-            "|---|:-:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+            "|---|:-:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
         )?;
         for (i, r) in self.rows.iter().enumerate() {
             let sc = |s: usize| peak_dynamic(&self.refs[s]);
@@ -539,11 +635,12 @@ impl Ctx {
             let e = &r.errors;
             writeln!(
                 m,
-                "| {}{} | {} | {:.0} | {:.2} | {:+.2} | {} / {} | {} / {} | {:+.2} | {} / {} | {:.2} | {} / {} | {} | {} | {} |",
+                "| {}{} | {} | {} | {:.2} | {:.2} | {:+.2} | {} / {} | {} / {} | {:+.2} | {} / {} | {:.2} | {} / {} | {} | {} | {} |",
                 r.cfg.label(),
                 if r.cfg == Config::DEFAULT { " (default)" } else { "" },
                 if front[i] { "●" } else { "" },
-                r.time * 1e6,
+                self.cost_cell(r),
+                r.ratio,
                 r.iterations_per_step[f413],
                 100.0 * (r.f1 / self.f1_ref - 1.0),
                 pct(e[l].tip_rms_5, sc(l)),
@@ -652,9 +749,11 @@ impl Ctx {
         let l = self.idx("locked-4.13");
         let (amp_ref, _, _, _) = statistics(&self.refs[l], self.p.last);
         writeln!(m, "## 5. Key numbers (from the tables above)\n")?;
-        writeln!(m, "| configuration | host µs per simulated s | × default | E [%] | locked 4.13 Hz amplitude err [%] | f₁ err [%] |")?;
-        writeln!(m, "|---|---:|---:|---:|---:|---:|")?;
-        let d_time = find(d).map(|i| self.rows[i].time).unwrap_or(f64::NAN);
+        writeln!(m, "| configuration | {} | × default | host time × default (paired) | E [%] | locked 4.13 Hz amplitude err [%] | f₁ err [%] |", self.cost_title())?;
+        writeln!(m, "|---|---:|---:|---:|---:|---:|---:|")?;
+        let d_cost = find(d)
+            .map(|i| self.cost(&self.rows[i]))
+            .unwrap_or(f64::NAN);
         let list = [
             d,
             d.with(|c| c.newton = Newton::Modified),
@@ -676,10 +775,11 @@ impl Ctx {
                 let r = &self.rows[i];
                 writeln!(
                     m,
-                    "| {} | {:.0} | {:.2} | {:.2} | {:+.2} | {:+.2} |",
+                    "| {} | {} | {:.2} | {:.2} | {:.2} | {:+.2} | {:+.2} |",
                     c.label(),
-                    r.time * 1e6,
-                    r.time / d_time,
+                    self.cost_cell(r),
+                    self.cost(r) / d_cost,
+                    r.ratio,
                     pts[i].1,
                     100.0 * (r.errors[l].amplitude / amp_ref - 1.0),
                     100.0 * (r.f1 / self.f1_ref - 1.0)
@@ -796,7 +896,7 @@ impl Ctx {
             .iter()
             .enumerate()
             .filter(|(_, p)| p.0.is_finite() && p.1.is_finite() && p.0 > 0.0 && p.1 > 0.0)
-            .map(|(i, p)| (p.0 * 1e6, p.1, i))
+            .map(|(i, p)| (p.0, p.1, i))
             .collect();
         let (x0, x1) = fin.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
             (a.min(p.0), b.max(p.0))
@@ -808,7 +908,11 @@ impl Ctx {
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(
-                "Error vs host run time (log–log); ● Pareto front",
+                if self.exact() {
+                    "Error vs Cortex-M4F instructions (log–log); ● Pareto front"
+                } else {
+                    "Error vs host run time (log–log); ● Pareto front"
+                },
                 ("sans-serif", 22),
             )
             .margin(15)
@@ -821,7 +925,11 @@ impl Ctx {
             .map_err(|e| err(&e))?;
         chart
             .configure_mesh()
-            .x_desc("host µs per simulated second (free ball 4.13 Hz)")
+            .x_desc(if self.exact() {
+                "Cortex-M4F instructions per simulated second, millions (QEMU, free ball 4.13 Hz)"
+            } else {
+                "host µs per simulated second (free ball 4.13 Hz)"
+            })
             .y_desc("E: worst RMS tip error, non-chaotic scenes [% of peak]")
             .label_style(("sans-serif", 13))
             .axis_desc_style(("sans-serif", 15))
