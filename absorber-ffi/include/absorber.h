@@ -341,6 +341,25 @@ typedef struct AbsorberDampingParams {
 } AbsorberDampingParams;
 
 /**
+ * Calibration of the reduced beam (`absorber_core::Calibration`; `host-sim calibrate` writes
+ * the three numbers in a scene's `[calibration]`). The identity is the paper's model.
+ */
+typedef struct AbsorberCalibrationParams {
+    /**
+     * Factor on the bending rigidity E·I \[-\] (1: none; 0.5 to 2).
+     */
+    double bending_stiffness;
+    /**
+     * Factor on the axial rigidity E·a \[-\] (1: none; 1e-6 to 1).
+     */
+    double axial_stiffness;
+    /**
+     * Fraction of HRZ-lumped mass in the element mass matrix \[-\] (0: consistent; 0 to 1).
+     */
+    double mass_lumping;
+} AbsorberCalibrationParams;
+
+/**
  * Everything the model needs, in SI units. Fill with [`absorber_params_default`], then edit.
  */
 typedef struct AbsorberParams {
@@ -373,6 +392,19 @@ typedef struct AbsorberParams {
      * Gravity g \[m/s²\] along −y.
      */
     double gravity;
+    /**
+     * Generalized-α weight α_m \[-\] (0 with `alpha_f` = 0: Newmark; set both, with γ and β,
+     * by [`absorber_params_generalized_alpha`]).
+     */
+    double alpha_m;
+    /**
+     * Generalized-α weight α_f \[-\].
+     */
+    double alpha_f;
+    /**
+     * Calibration of the reduced beam (identity by default).
+     */
+    struct AbsorberCalibrationParams calibration;
 } AbsorberParams;
 
 /**
@@ -1045,6 +1077,19 @@ extern "C" {
  * `params` is NULL or valid for writes.
  */
 enum AbsorberStatus absorber_params_default(struct AbsorberParams *params);
+
+/**
+ * Switches `params` to the generalized-α integrator with high-frequency spectral radius
+ * `rho_inf` (0 to 1): sets γ, β, α_m and α_f (`absorber_core::Integrator::generalized_alpha`;
+ * Chung & Hulbert 1993). Little numerical damping at the resolved modes, `rho_inf` per step at
+ * the unresolved ones: use it with structural damping (`damping.stiffness_proportional`).
+ * A `rho_inf` outside \[0, 1\] gives weights that `absorber_init` rejects by name.
+ *
+ * # Safety
+ * `params` is NULL or valid for reads and writes of one `AbsorberParams`.
+ */
+enum AbsorberStatus absorber_params_generalized_alpha(struct AbsorberParams *params,
+                                                      double rho_inf);
 
 /**
  * Storage a variant needs in this build \[bytes\] (at most its `ABSORBER_MODEL_SIZE_*`), or 0

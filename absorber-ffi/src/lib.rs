@@ -319,6 +319,19 @@ pub struct AbsorberDampingParams {
     pub stiffness_proportional: f64,
 }
 
+/// Calibration of the reduced beam (`absorber_core::Calibration`; `host-sim calibrate` writes
+/// the three numbers in a scene's `[calibration]`). The identity is the paper's model.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AbsorberCalibrationParams {
+    /// Factor on the bending rigidity E·I \[-\] (1: none; 0.5 to 2).
+    pub bending_stiffness: f64,
+    /// Factor on the axial rigidity E·a \[-\] (1: none; 1e-6 to 1).
+    pub axial_stiffness: f64,
+    /// Fraction of HRZ-lumped mass in the element mass matrix \[-\] (0: consistent; 0 to 1).
+    pub mass_lumping: f64,
+}
+
 /// Everything the model needs, in SI units. Fill with [`absorber_params_default`], then edit.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -338,6 +351,13 @@ pub struct AbsorberParams {
     pub damping: AbsorberDampingParams,
     /// Gravity g \[m/s²\] along −y.
     pub gravity: f64,
+    /// Generalized-α weight α_m \[-\] (0 with `alpha_f` = 0: Newmark; set both, with γ and β,
+    /// by [`absorber_params_generalized_alpha`]).
+    pub alpha_m: f64,
+    /// Generalized-α weight α_f \[-\].
+    pub alpha_f: f64,
+    /// Calibration of the reduced beam (identity by default).
+    pub calibration: AbsorberCalibrationParams,
 }
 
 /// Opaque model: a pointer into the caller's storage, made by [`absorber_init`].
@@ -937,6 +957,11 @@ fn to_params<T: Real>(p: &AbsorberParams) -> Result<Params<T>, Error> {
     };
     q.damping.stiffness_proportional = lit(p.damping.stiffness_proportional);
     q.gravity = lit(p.gravity);
+    q.integrator.alpha_m = lit(p.alpha_m);
+    q.integrator.alpha_f = lit(p.alpha_f);
+    q.calibration.bending_stiffness = lit(p.calibration.bending_stiffness);
+    q.calibration.axial_stiffness = lit(p.calibration.axial_stiffness);
+    q.calibration.mass_lumping = lit(p.calibration.mass_lumping);
     Ok(q)
 }
 
@@ -1047,9 +1072,43 @@ pub unsafe extern "C" fn absorber_params_default(params: *mut AbsorberParams) ->
             stiffness_proportional: d.damping.stiffness_proportional,
         },
         gravity: d.gravity,
+        alpha_m: d.integrator.alpha_m,
+        alpha_f: d.integrator.alpha_f,
+        calibration: AbsorberCalibrationParams {
+            bending_stiffness: d.calibration.bending_stiffness,
+            axial_stiffness: d.calibration.axial_stiffness,
+            mass_lumping: d.calibration.mass_lumping,
+        },
     };
     // SAFETY: non-null, valid for writes by the caller's guarantee.
     unsafe { params.write(p) };
+    AbsorberStatus::Ok
+}
+
+/// Switches `params` to the generalized-α integrator with high-frequency spectral radius
+/// `rho_inf` (0 to 1): sets γ, β, α_m and α_f (`absorber_core::Integrator::generalized_alpha`;
+/// Chung & Hulbert 1993). Little numerical damping at the resolved modes, `rho_inf` per step at
+/// the unresolved ones: use it with structural damping (`damping.stiffness_proportional`).
+/// A `rho_inf` outside \[0, 1\] gives weights that `absorber_init` rejects by name.
+///
+/// # Safety
+/// `params` is NULL or valid for reads and writes of one `AbsorberParams`.
+#[no_mangle]
+pub unsafe extern "C" fn absorber_params_generalized_alpha(
+    params: *mut AbsorberParams,
+    rho_inf: f64,
+) -> AbsorberStatus {
+    // SAFETY: NULL or valid by the caller's guarantee.
+    let Some(p) = (unsafe { params.as_mut() }) else {
+        return AbsorberStatus::NullPointer;
+    };
+    let i = Params::<f64>::default()
+        .integrator
+        .generalized_alpha(rho_inf);
+    p.integrator.gamma = i.gamma;
+    p.integrator.beta = i.beta;
+    p.alpha_m = i.alpha_m;
+    p.alpha_f = i.alpha_f;
     AbsorberStatus::Ok
 }
 

@@ -1303,10 +1303,16 @@ impl FullSolver {
     /// Generalized contact force on the ball along θ in a held state: `−λ` of the lock
     /// constraint, from the augmented system.
     fn contact_force(&self, s: &FullState) -> Result<f64, Error> {
-        let mode = self.mode(s.contact);
-        if !matches!(mode, Mode::Held(_)) {
+        if !matches!(self.mode(s.contact), Mode::Held(_)) {
             return Ok(0.0);
         }
+        Ok(-self.multipliers(s)?[5])
+    }
+
+    /// The Lagrange multipliers of the local constraints at state `s` (augmented system in the
+    /// state's contact mode).
+    fn multipliers(&self, s: &FullState) -> Result<[f64; MC], Error> {
+        let mode = self.mode(s.contact);
         let qi = self.gather_ind(&s.q, mode);
         let vi = self.gather_ind(&s.v, mode);
         let ai = self.gather_ind(&s.a, mode);
@@ -1322,7 +1328,7 @@ impl FullSolver {
             &mut warm,
             s.theta_ref,
         )?;
-        Ok(-ev.lambda_local[5])
+        Ok(ev.lambda_local)
     }
 
     /// The track's force on the ball at the current state, `(N, F_t)` \[N\] (normal along the
@@ -1337,24 +1343,7 @@ impl FullSolver {
         }
         let s = &self.state;
         let mode = self.mode(s.contact);
-        let qi = self.gather_ind(&s.q, mode);
-        let vi = self.gather_ind(&s.v, mode);
-        let ai = self.gather_ind(&s.a, mode);
-        let mut warm = self.local_of(&s.q);
-        let ev = self
-            .evaluate(
-                &mut lock(&self.work).mass,
-                None,
-                &qi,
-                &vi,
-                &ai,
-                self.effective_gravity(s.base_accel),
-                mode,
-                &mut warm,
-                s.theta_ref,
-            )
-            .ok()?;
-        let l = &ev.lambda_local;
+        let l = self.multipliers(s).ok()?;
         let lock_term = match mode {
             Mode::Held(_) => l[5] / self.params.ball.path_radius(),
             _ => 0.0,
