@@ -64,7 +64,7 @@ pub struct State<T, const D: usize> {
     pub a: SVector<T, D>,
     /// The generalized-α scheme's acceleration-like variable `a_n` (Arnold & Brüls 2007;
     /// [`crate::Integrator`]). Newmark's method never reads it (it equals `a` there); after an
-    /// impact, a start or a restored state it restarts at `a`.
+    /// impact or a start it restarts at `a` (a state given to `set_state` keeps its own).
     pub pseudo_accel: SVector<T, D>,
     /// Time since the start \[s\], `steps · h` (not a running sum: in `f32` adding 3 ms to an
     /// hour drifts by tens of seconds).
