@@ -48,15 +48,13 @@ impl<T: Real> AlphaRecursion<T> {
             ratio: (one - integrator.alpha_f) / d,
         })
     }
-}
 
-impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
-    /// The Newton chain of a step of length `h`: `(c_q, c_v, c_m) = (κβh², κγh, 1)` (`κ = 1`
-    /// for Newmark).
-    pub(crate) fn newmark_chain(&self, h: T) -> Chain<T> {
-        let i = &self.params.integrator;
-        let (c_q, c_v) = (i.beta * h * h, i.gamma * h);
-        match &self.alpha {
+    /// The Newton chain of a step of length `h`: `(c_q, c_v, c_m) = (κβh², κγh, 1)` with the
+    /// recursion `alpha` (`κ = 1` for Newmark, `None`). The one formula of the core and the
+    /// full solver.
+    pub fn chain(integrator: &Integrator<T>, alpha: Option<&Self>, h: T) -> Chain<T> {
+        let (c_q, c_v) = (integrator.beta * h * h, integrator.gamma * h);
+        match alpha {
             None => Chain {
                 c_q,
                 c_v,
@@ -68,6 +66,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 c_m: T::one(),
             },
         }
+    }
+}
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
+    /// The Newton chain of a step of length `h`: `(c_q, c_v, c_m) = (κβh², κγh, 1)` (`κ = 1`
+    /// for Newmark).
+    pub(crate) fn newmark_chain(&self, h: T) -> Chain<T> {
+        AlphaRecursion::chain(&self.params.integrator, self.alpha.as_ref(), h)
     }
 
     /// One step of length `h` from `s` to the input `base_accel` at its end; the ball's

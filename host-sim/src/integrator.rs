@@ -9,6 +9,7 @@
 //! check against: Newmark `ζ̄ → (γ − ½)Ω/2` for `Ω → 0`; the trapezoidal rule `ζ̄ = 0`;
 //! generalized-α spectral radius `→ ρ∞` for `Ω → ∞`.
 
+use absorber_core::newmark::AlphaRecursion;
 use absorber_core::Integrator;
 use nalgebra::Matrix3;
 
@@ -16,18 +17,23 @@ use nalgebra::Matrix3;
 /// h²a)`, `a` the scheme's acceleration variable).
 fn amplification(i: &Integrator<f64>, omega_h: f64) -> Matrix3<f64> {
     let w2 = omega_h * omega_h;
-    let (am, af, g, b) = (i.alpha_m, i.alpha_f, i.gamma, i.beta);
-    let kappa = (1.0 - af) / (1.0 - am);
+    let (g, b) = (i.gamma, i.beta);
+    // The core's recursion constants (Newmark: a = q̈).
+    let r = AlphaRecursion::of(i).unwrap_or(AlphaRecursion {
+        from_accel: 0.0,
+        from_pseudo: 0.0,
+        ratio: 1.0,
+    });
     let mut m = Matrix3::zeros();
     for j in 0..3 {
         let mut e = [0.0; 3];
         e[j] = 1.0;
         let [x, v, pa] = e;
         // a' = (α_f q̈ − α_m a)/(1 − α_m) + κ q̈', q̈ = −Ω² x (h = 1), q̈' = −Ω² x'.
-        let known = (af * (-w2 * x) - am * pa) / (1.0 - am);
+        let known = r.from_accel * (-w2 * x) + r.from_pseudo * pa;
         let x_pred = x + v + (0.5 - b) * pa + b * known;
-        let x1 = x_pred / (1.0 + w2 * b * kappa);
-        let pa1 = known + kappa * (-w2 * x1);
+        let x1 = x_pred / (1.0 + w2 * b * r.ratio);
+        let pa1 = known + r.ratio * (-w2 * x1);
         let v1 = v + (1.0 - g) * pa + g * pa1;
         m[(0, j)] = x1;
         m[(1, j)] = v1;

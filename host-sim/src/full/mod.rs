@@ -1169,15 +1169,7 @@ impl FullSolver {
     /// (`κ = 1` for Newmark; `absorber_core::newmark`).
     fn step_chain(&self, h: f64) -> Chain<f64> {
         let it = &self.params.integrator;
-        let (c_q, c_v) = (it.beta * h * h, it.gamma * h);
-        match AlphaRecursion::of(it) {
-            None => Chain { c_q, c_v, c_m: 1.0 },
-            Some(g) => Chain {
-                c_q: c_q * g.ratio,
-                c_v: c_v * g.ratio,
-                c_m: 1.0,
-            },
-        }
+        AlphaRecursion::chain(it, AlphaRecursion::of(it).as_ref(), h)
     }
 
     /// One Newmark (or generalized-α) step of the independent coordinates
