@@ -76,6 +76,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub(crate) fn equilibrium_heights(&self) -> Heights<T> {
         let s = State {
             q: self.sys.equilibrium,
+            contact: crate::model::Contact::Off,
             ..self.state
         };
         let ang = self.angles_of(&s);
@@ -129,7 +130,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         }
         let ang = self.angles_of(s);
         let (sin_theta, cos_theta) = ang.theta_sin_cos().unwrap_or((z, T::one()));
-        let now = self.heights(&s.q, &ang, cos_theta);
+        let mut now = self.heights(&s.q, &ang, cos_theta);
+        let flying = s.contact == crate::model::Contact::InFlight;
+        if flying {
+            now.ball = s.flight.centre[1];
+        }
         e.beam_potential = g * (now.beam - eq.beam + self.sys.params.beam.mass * base_displacement);
         if S::HAS_TIP {
             let rate = ang.psi_rate;
@@ -145,11 +150,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             if let Some((_, theta_rate)) = ang.theta {
                 let b = &self.sys.params.ball;
                 let rho = b.path_radius();
-                let (vx, vy) = (
-                    xd + rho * theta_rate * cos_theta,
-                    yd + rho * theta_rate * sin_theta,
-                );
-                let spin = ((rho + b.radius) * rate - rho * theta_rate) / b.radius;
+                let (vx, vy, spin) = if flying {
+                    let (c, w) = (&s.flight.velocity, s.v.get(4 * N).copied().unwrap_or(z));
+                    (c[0], c[1] + base_velocity, w)
+                } else {
+                    (
+                        xd + rho * theta_rate * cos_theta,
+                        yd + rho * theta_rate * sin_theta,
+                        ((rho + b.radius) * rate - rho * theta_rate) / b.radius,
+                    )
+                };
                 e.ball_kinetic = half * (b.mass * (vx * vx + vy * vy) + b.inertia * spin * spin);
                 e.ball_potential = g * b.mass * (now.ball - eq.ball + base_displacement);
             }

@@ -24,13 +24,16 @@ pub use crate::newton::{DAMPING_TRIALS, MAX_STEP};
 /// sample used to be accepted and leave a state from which no later step converged).
 pub const MAX_BASE_ACCEL: f64 = 1.0e4;
 
-/// Whether the free ball rests on a stop.
+/// Where the free ball is: rolling on the track (off the stops or resting on one), or flying.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Contact {
-    /// Ball off the stops (or no stops / no free ball).
+    /// Ball on the track, off the stops (or no stops / no free ball).
     Off,
     /// Ball resting on the stop at `+φ_max` (`Positive`) or `−φ_max` (`Negative`).
     OnStop(Side),
+    /// Ball in flight inside the housing ([`crate::flight`]; its centre is the state's
+    /// [`State::flight`]).
+    InFlight,
 }
 
 /// Which stop.
@@ -73,8 +76,10 @@ pub struct State<T, const D: usize> {
     pub steps: u64,
     /// Base acceleration ÿ_b of the last step (the input at `time`) \[m/s²\].
     pub base_accel: T,
-    /// Stop contact.
+    /// Track and stop contact.
     pub contact: Contact,
+    /// The flying ball's centre (read only while `contact` is [`Contact::InFlight`]).
+    pub flight: crate::flight::Flight<T>,
 }
 
 /// A stop impact that happened during a step.
@@ -101,8 +106,39 @@ pub struct StepReport<T> {
     pub iterations: u32,
     /// Largest final scaled position increment of the Newton solves \[-\].
     pub increment: T,
-    /// Stop impact within the step, if any.
+    /// Stop impact within the step, if any (on the track or in flight).
     pub impact: Option<Impact<T>>,
+    /// Time at which the ball left the track within the step, if it did \[s\].
+    pub separation: Option<T>,
+    /// Landing on the track within the step, if any.
+    pub landing: Option<crate::flight::Landing<T>>,
+}
+
+impl<T: Real> StepReport<T> {
+    /// The report in `f64` (exact from `f32`), for host tools comparing precisions.
+    pub fn to_f64(&self) -> StepReport<f64> {
+        let f = crate::scalar::to_f64::<T>;
+        StepReport {
+            iterations: self.iterations,
+            increment: f(self.increment),
+            impact: self.impact.map(|i| Impact {
+                time: f(i.time),
+                side: i.side,
+                relative_speed: f(i.relative_speed),
+                impulse: f(i.impulse),
+                energy_loss: f(i.energy_loss),
+                stuck: i.stuck,
+            }),
+            separation: self.separation.map(f),
+            landing: self.landing.map(|l| crate::flight::Landing {
+                time: f(l.time),
+                normal_speed: f(l.normal_speed),
+                normal_impulse: f(l.normal_impulse),
+                tangential_impulse: f(l.tangential_impulse),
+                bounced: l.bounced,
+            }),
+        }
+    }
 }
 
 /// The start error when the beam end tilts beyond a stop at static equilibrium (both solvers).
@@ -166,6 +202,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 steps: 0,
                 base_accel: T::zero(),
                 contact: Contact::Off,
+                flight: crate::flight::Flight::zero(),
             },
             work: Workspace::default(),
             max_input: crate::scalar::lit(MAX_BASE_ACCEL),
@@ -208,6 +245,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             steps: 0,
             base_accel: T::zero(),
             contact: Contact::Off,
+            flight: crate::flight::Flight::zero(),
         };
         Ok(iterations)
     }
@@ -293,17 +331,30 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         ws: &mut Workspace<T, D>,
     ) -> Result<(State<T, D>, StepReport<T>), Error> {
         let h = self.params.integrator.step;
-        // 1. Newmark over the whole step (the ball keeps its contact).
+        // 1. Newmark over the whole step (the ball keeps its contact, on the track or flying).
         let (trial, solved) =
             self.newmark(start, h, base_accel, ws, self.params.integrator.newton)?;
         let mut report = StepReport {
             iterations: solved.iterations,
             increment: solved.increment,
             impact: None,
+            separation: None,
+            landing: None,
         };
-        // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
-        let mut next = self.stop_events(start, trial, base_accel, ws, &mut report)?;
-        // 3. The clock: whole steps times h (a running sum of h drifts in f32).
+        let mut next = if start.contact == Contact::InFlight {
+            // 2'. In flight: a landing or a stop splits the step at the crossing.
+            self.flight_events(start, trial, base_accel, ws, &mut report)?
+        } else {
+            // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
+            let next = self.stop_events(start, trial, base_accel, ws, &mut report)?;
+            // 3. Separation: a track that would pull the ball lets it fly.
+            if self.flies() && report.impact.is_none() {
+                self.separation(start, next, base_accel, ws, &mut report)?
+            } else {
+                next
+            }
+        };
+        // 4. The clock: whole steps times h (a running sum of h drifts in f32).
         next.steps = start.steps.saturating_add(1);
         next.time = T::from_count(next.steps) * h;
         Self::is_finite(&next)?;
@@ -446,6 +497,7 @@ mod tests {
     fn newton_matrix_is_exact_derivative_of_residual() {
         check_jacobian::<FreeBall, 2, 9>(Contact::Off);
         check_jacobian::<FreeBall, 2, 9>(Contact::OnStop(Side::Positive));
+        check_jacobian::<FreeBall, 2, 9>(Contact::InFlight);
         check_jacobian::<LockedBall, 2, 8>(Contact::Off);
         check_jacobian::<FreeBall, 3, 13>(Contact::Off);
         check_jacobian::<FreeBall, 5, 21>(Contact::Off);

@@ -131,6 +131,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             steps: s.steps,
             base_accel,
             contact: s.contact,
+            flight: s.flight,
         };
         next.q.axpy(ch.c_q, &a, T::one());
         next.v.axpy(ch.c_v, &a, T::one());
@@ -138,8 +139,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             next.pseudo_accel = known;
             next.pseudo_accel.axpy(g.ratio, &a, T::one());
         }
-        if let crate::model::Contact::OnStop(side) = next.contact {
-            self.hold_on_stop(&mut next, side);
+        match next.contact {
+            crate::model::Contact::OnStop(side) => self.hold_on_stop(&mut next, side),
+            crate::model::Contact::InFlight => {
+                next.flight = self.fly(&s.flight, h, self.effective_gravity(base_accel));
+            }
+            crate::model::Contact::Off => {}
         }
         Ok((next, solved))
     }

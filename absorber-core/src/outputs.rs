@@ -1,6 +1,6 @@
 //! What firmware reads back after a step.
 
-use crate::model::{Model, State};
+use crate::model::{Contact, Model, State};
 use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
 use crate::tip;
@@ -79,6 +79,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let theta = match S::BALL {
             BallKind::None => None,
             BallKind::Locked => Some((psi, psi_rate)),
+            BallKind::Free if s.contact == Contact::InFlight => {
+                // The flying ball's polar angle about A, on the branch of ψ.
+                let (alpha, rate) = self.sys.flight_relative_angle(s);
+                Some((psi + alpha, psi_rate + rate))
+            }
             BallKind::Free => Some(tip::orbit_angle(&self.sys.inertia, &x)),
         };
         Angles {
@@ -128,25 +133,28 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         self.angles_of(&self.state).ball_relative()
     }
 
-    /// The track's force on the ball ([`ContactForces`]); `None` without a free ball.
+    /// The track's force on the ball ([`ContactForces`]; zero while it flies); `None`
+    /// without a free ball.
     pub fn contact_forces(&self) -> Option<ContactForces<T>> {
         if !matches!(S::BALL, BallKind::Free) || S::EXTRA_DOFS != 1 {
             return None;
         }
-        let s = &self.state;
-        let x = Self::local(&s.q, &s.v, &s.a);
-        let (_, _, psi_accel) = tip::psi_all(&x);
-        let i = &self.sys.inertia;
-        let (theta, theta_rate) = tip::orbit_angle(i, &x);
-        let theta_accel = i.orbit_per_tilt * psi_accel - i.orbit_per_spin * x.a[4];
-        let (sin, cos) = theta.fast_sin_cos();
-        let ball = &self.sys.params.ball;
-        let rho = ball.path_radius();
-        let (xa, ya_g) = (x.a[0], x.a[1] + self.sys.effective_gravity(s.base_accel));
-        Some(ContactForces {
-            normal: ball.mass * (-xa * sin + ya_g * cos + rho * theta_rate * theta_rate),
-            tangential: ball.mass * (xa * cos + ya_g * sin + rho * theta_accel),
-        })
+        let (normal, tangential) = self.sys.track_forces(&self.state);
+        Some(ContactForces { normal, tangential })
+    }
+
+    /// The ball flies inside the housing ([`crate::flight`]).
+    pub fn in_flight(&self) -> bool {
+        self.state.contact == Contact::InFlight
+    }
+
+    /// The ball's centre and its velocity in the frame translating with the base (x along the
+    /// undeformed beam from the clamp, y up) \[m, m/s\]; `None` without a free ball.
+    pub fn ball_centre(&self) -> Option<([T; 2], [T; 2])> {
+        if !matches!(S::BALL, BallKind::Free) || S::EXTRA_DOFS != 1 {
+            return None;
+        }
+        Some(self.sys.ball_centre(&self.state))
     }
 
     /// Time since the start \[s\].
@@ -170,7 +178,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             let ang = self.angles_of(&self.state);
             p += self.sys.params.tip.mass
                 * (y_rate + self.sys.params.tip.offset * ang.psi_rate * ang.sin_psi);
-            if let (Some((_, theta_rate)), Some((sin_theta, _))) = (ang.theta, ang.theta_sin_cos())
+            if self.state.contact == Contact::InFlight {
+                p += self.sys.params.ball.mass * self.state.flight.velocity[1];
+            } else if let (Some((_, theta_rate)), Some((sin_theta, _))) =
+                (ang.theta, ang.theta_sin_cos())
             {
                 let rho = self.sys.params.ball.path_radius();
                 p += self.sys.params.ball.mass * (y_rate + rho * theta_rate * sin_theta);

@@ -54,6 +54,16 @@ pub struct BallParams<T> {
     pub initial_angle: T,
     /// How the stop impulse is distributed over the system.
     pub impact_model: ImpactModel,
+    /// The ball may leave the track when the track would have to pull it (normal force
+    /// `N < 0`), fly inside the housing and land again ([`crate::flight`]; issue 13). `false`
+    /// keeps the bilateral track of the paper (the ball is held on its circle by any force),
+    /// bit-identical to the rolling model. Only scenes whose type allows flight
+    /// ([`crate::Scene::FLIGHT`]) read it. Default `true`.
+    pub flight: bool,
+    /// Coefficient of normal restitution e_n of a landing on the track \[-\] (not in the paper;
+    /// default 0.5, the stops' value: the same ball on the same housing). A landing slower
+    /// than `ρ · stick_speed` along the normal is plastic and the ball rolls on.
+    pub landing_restitution: T,
 }
 
 /// How a stop impulse `Λ ∇Gᵀ` changes the velocities (both give `Ġ⁺ = −e Ġ⁻` exactly).
@@ -275,6 +285,8 @@ impl<T: Real> Default for Params<T> {
                 stick_speed: lit(0.02),
                 initial_angle: lit(1.0f64.to_radians()),
                 impact_model: ImpactModel::OverStep,
+                flight: true,
+                landing_restitution: lit(0.5),
             },
             integrator: Integrator {
                 gamma: lit(0.7),
@@ -365,6 +377,13 @@ impl<T: Real> Params<T> {
             if bl.restitution > T::one() {
                 return Err(Error::InvalidParameter {
                     field: "ball.restitution",
+                    reason: "must be at most 1",
+                });
+            }
+            non_negative(bl.landing_restitution, "ball.landing_restitution")?;
+            if bl.landing_restitution > T::one() {
+                return Err(Error::InvalidParameter {
+                    field: "ball.landing_restitution",
                     reason: "must be at most 1",
                 });
             }

@@ -43,6 +43,9 @@ pub trait Scene: Copy + Default + 'static {
     const BALL: BallKind;
     /// The ±stop angle is enforced (free ball only).
     const STOPS: bool;
+    /// The free ball may leave the track ([`crate::flight`]; at run time also
+    /// `ball.flight`). A scene without it compiles the flight code out.
+    const FLIGHT: bool = false;
     /// Unknowns the scene adds after the 4N beam coordinates.
     const EXTRA_DOFS: usize = if matches!(Self::BALL, BallKind::Free) {
         1
@@ -90,7 +93,19 @@ impl Scene for FreeBall {
     const HAS_TIP: bool = true;
     const BALL: BallKind = BallKind::Free;
     const STOPS: bool = true;
+    const FLIGHT: bool = true;
     const NAME: &'static str = "free";
+}
+
+/// Free ball with stops held on its track by any force (the paper's bilateral track: no
+/// flight). Bit-identical to [`FreeBall`] with `ball.flight = false`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FreeBallNoFlight;
+impl Scene for FreeBallNoFlight {
+    const HAS_TIP: bool = true;
+    const BALL: BallKind = BallKind::Free;
+    const STOPS: bool = true;
+    const NAME: &'static str = "free-noflight";
 }
 
 /// Free ball without stops (the track is a full circle).
@@ -100,5 +115,6 @@ impl Scene for FreeBallNoStops {
     const HAS_TIP: bool = true;
     const BALL: BallKind = BallKind::Free;
     const STOPS: bool = false;
+    const FLIGHT: bool = true;
     const NAME: &'static str = "free-nostops";
 }

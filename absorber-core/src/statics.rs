@@ -126,6 +126,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             steps: 0,
             base_accel,
             contact: Contact::Off,
+            flight: crate::flight::Flight::zero(),
         };
         if S::EXTRA_DOFS == 1 {
             let stop = self.params.ball.stop_angle;

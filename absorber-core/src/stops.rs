@@ -55,6 +55,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 }
                 Ok(next)
             }
+            Contact::InFlight => Ok(next), // (flight events: crate::flight)
         }
     }
 
@@ -107,20 +108,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         // A second crossing within the same (remaining) step: the ball came straight back
         // onto the stop; end the step with it resting there (plastic).
         if end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
-            let side2 = if self.relative_angle(&end) > T::zero() {
-                Side::Positive
-            } else {
-                Side::Negative
-            };
-            self.hold_on_stop(&mut end, side2);
-            end.contact = Contact::OnStop(side2);
-            let acc = self.consistent_acceleration(&end, ws, kind)?;
-            report.iterations += acc.iterations;
-            end.a = acc.x;
-            end.pseudo_accel = end.a;
-            if side2.sign::<T>() * self.contact_force(&end) > T::zero() {
-                end.contact = Contact::Off;
-            }
+            self.rest_on_stop(&mut end, ws, report)?;
         }
         report.impact = Some(impact);
         Ok(end)
@@ -131,37 +119,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// interpolant, error O(h²), misplaces the ball by ~α̈h²/8, which the projection onto the
     /// stop then turns into a potential-energy error).
     fn crossing_fraction(&self, start: &State<T, D>, end: &State<T, D>, h: T, target: T) -> T {
-        let (a0, a1) = (
+        crate::flight::hermite_root(
             self.relative_angle(start) - target,
+            self.relative_rate(start) * h,
             self.relative_angle(end) - target,
-        );
-        let (d0, d1) = (self.relative_rate(start) * h, self.relative_rate(end) * h);
-        let (two, three, six) = (lit::<T>(2.0), lit::<T>(3.0), lit::<T>(6.0));
-        let linear = a0 / (a0 - a1);
-        let mut tau = if linear.is_finite() {
-            linear.max(T::zero()).min(T::one())
-        } else {
-            T::zero()
-        };
-        for _ in 0..6 {
-            let (t2, t3) = (tau * tau, tau * tau * tau);
-            let p = (two * t3 - three * t2 + T::one()) * a0
-                + (t3 - two * t2 + tau) * d0
-                + (three * t2 - two * t3) * a1
-                + (t3 - t2) * d1;
-            let dp = (six * t2 - six * tau) * (a0 - a1)
-                + (three * t2 - lit::<T>(4.0) * tau + T::one()) * d0
-                + (three * t2 - two * tau) * d1;
-            if !is_positive(dp.abs()) {
-                break;
-            }
-            let next = tau - p / dp;
-            if !next.is_finite() {
-                break;
-            }
-            tau = next.max(T::zero()).min(T::one());
-        }
-        tau
+            self.relative_rate(end) * h,
+        )
     }
 
     /// Stop impact (MODEL.md, MODEL-DERIVATION §6): projects the ball onto the stop, applies the

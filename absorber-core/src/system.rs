@@ -25,6 +25,8 @@ pub struct System<T, S, const N: usize, const D: usize> {
     pub(crate) params: Params<T>,
     pub(crate) beam: Beam<T>,
     pub(crate) inertia: TipInertia<T>,
+    /// The tip body without the ball (the housing while the ball flies).
+    pub(crate) flight_inertia: TipInertia<T>,
     /// Static equilibrium (zero relative velocity) the run started from.
     pub(crate) equilibrium: SVector<T, D>,
     /// Scale of each unknown for the convergence test: beam length for positions, 1 otherwise.
@@ -100,6 +102,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         Self {
             inertia: TipInertia::new(&params, S::HAS_TIP, S::BALL),
+            flight_inertia: TipInertia::new(&params, S::HAS_TIP, BallKind::None),
             beam: Beam::with_lumping(
                 element,
                 params.damping.stiffness_proportional,
@@ -153,7 +156,24 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             (BallKind::Free, Contact::OnStop(side)) => {
                 BallMode::Held(side.sign::<T>() * self.params.ball.stop_angle)
             }
+            (BallKind::Free, Contact::InFlight) => BallMode::Flying,
         }
+    }
+
+    /// The inertia of the tip rows in `mode` (the tip body alone while the ball flies).
+    #[inline]
+    fn inertia_of(&self, mode: BallMode<T>) -> &TipInertia<T> {
+        if S::FLIGHT && mode == BallMode::Flying {
+            &self.flight_inertia
+        } else {
+            &self.inertia
+        }
+    }
+
+    /// The ball may leave the track in this run (scene type and `ball.flight`).
+    #[inline]
+    pub(crate) fn flies(&self) -> bool {
+        S::FLIGHT && self.params.ball.flight
     }
 
     /// Residual of the equations of motion at `(q, v, a)` into `r` (overwritten); returns the
@@ -180,8 +200,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             c_v: zero,
             c_m: zero,
         };
-        let (rows, force) =
-            tip::residual::<T, Plain<T>>(&self.inertia, &x, &ch, g_eff, mode, S::EXTRA_DOFS == 1);
+        let (rows, force) = tip::residual::<T, Plain<T>>(
+            self.inertia_of(mode),
+            &x,
+            &ch,
+            g_eff,
+            mode,
+            S::EXTRA_DOFS == 1,
+        );
         if let Some(dst) = r.as_mut_slice().get_mut(Self::END..) {
             for (d, row) in dst.iter_mut().zip(rows.iter()) {
                 *d += row.0;
@@ -217,8 +243,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         let x = Self::local(q, v, a);
         let mode = self.ball_mode(contact, plumb);
-        let (rows, force) =
-            tip::residual::<T, D5<T>>(&self.inertia, &x, ch, g_eff, mode, S::EXTRA_DOFS == 1);
+        let (rows, force) = tip::residual::<T, D5<T>>(
+            self.inertia_of(mode),
+            &x,
+            ch,
+            g_eff,
+            mode,
+            S::EXTRA_DOFS == 1,
+        );
         let n = if S::EXTRA_DOFS == 1 { LOCAL } else { 4 };
         for (i, row) in rows.iter().enumerate().take(n) {
             if let Some(dst) = r.get_mut(Self::END + i) {

@@ -48,6 +48,9 @@ pub enum BallMode<T> {
     Held(T),
     /// Ball free: its spin φ is an unknown.
     Free,
+    /// Ball in flight: gone from the housing (the tip rows use the tip body's inertia alone)
+    /// and its spin φ torque-free, row 4 = φ̈ ([`crate::flight`]).
+    Flying,
     /// Static solve of a free ball: φ is an unknown pinned by row 4 to the plumb position
     /// θ = 0 (an equilibrium for any gravity, the only stable one for g > 0; with g = 0 the
     /// ball's own equation would be singular).
@@ -278,8 +281,11 @@ pub fn residual<T: Real, A: Number<T>>(
     let mut row4 = A::constant(T::zero());
     let mut contact = T::zero();
 
+    if mode == BallMode::Flying {
+        row4 = A::variable(x.a[4], 4, ch.c_m);
+    }
     let theta = match mode {
-        BallMode::Absent => None,
+        BallMode::Absent | BallMode::Flying => None,
         BallMode::Held(lock) => Some((ps.psi.add_re(lock), ps.rate, ps.accel)),
         BallMode::Free | BallMode::Plumb => {
             // θ = (R_tr ψ − r_b φ)/ρ, and likewise for its rates (linear in ψ and φ).

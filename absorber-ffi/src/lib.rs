@@ -614,6 +614,7 @@ fn contact_code(c: Contact) -> i32 {
         Contact::Off => 0,
         Contact::OnStop(Side::Positive) => 1,
         Contact::OnStop(Side::Negative) => -1,
+        Contact::InFlight => 2,
     }
 }
 
@@ -1763,6 +1764,8 @@ unsafe fn monitor_record<T: Scalar>(
             energy_loss: r.impact_energy_loss,
             stuck: r.impact_stuck != 0,
         }),
+        separation: None,
+        landing: None,
     };
     match m.record(mon, &rep, base_accel) {
         Ok(s) => {

@@ -110,7 +110,14 @@ impl<S: Scene, const N: usize, const D: usize> Sim for Model<f32, S, N, D> {
             absorber_core::Contact::Off => 0,
             absorber_core::Contact::OnStop(absorber_core::Side::Positive) => 1,
             absorber_core::Contact::OnStop(absorber_core::Side::Negative) => 2,
+            absorber_core::Contact::InFlight => 3,
         });
+        if s.contact == absorber_core::Contact::InFlight {
+            let fl = &s.flight;
+            for x in fl.centre.iter().chain(fl.velocity.iter()) {
+                f(x.to_bits());
+            }
+        }
     }
 }
 
@@ -331,6 +338,8 @@ impl Sim for Empty {
             iterations: 1,
             increment: 0.0,
             impact: None,
+            separation: None,
+            landing: None,
         })
     }
 

@@ -6,8 +6,8 @@ use crate::scene::{Kind, Precision};
 use crate::sim::{Observation, Simulator};
 use absorber_core::{
     BallParams, BeamOnly, BeamParams, Calibration, Damping, Energies, Error, FreeBall,
-    FreeBallNoStops, Impact, Integrator, LockedBall, Model, Params, Real, Scene, StepReport,
-    TipMass, TipParams,
+    FreeBallNoStops, Integrator, LockedBall, Model, Params, Real, Scene, StepReport, TipMass,
+    TipParams,
 };
 
 /// A core model of any scene, size and scalar.
@@ -52,18 +52,7 @@ impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator
 {
     fn step(&mut self, base_accel: f64) -> Result<StepReport<f64>, Error> {
         let r = self.model.step(absorber_core::scalar::lit(base_accel))?;
-        Ok(StepReport {
-            iterations: r.iterations,
-            increment: f64_of(r.increment),
-            impact: r.impact.map(|i| Impact {
-                time: f64_of(i.time),
-                side: i.side,
-                relative_speed: f64_of(i.relative_speed),
-                impulse: f64_of(i.impulse),
-                energy_loss: f64_of(i.energy_loss),
-                stuck: i.stuck,
-            }),
-        })
+        Ok(r.to_f64())
     }
 
     fn observe(&self) -> Observation {
@@ -148,6 +137,8 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             stick_speed: b.stick_speed as f32,
             initial_angle: b.initial_angle as f32,
             impact_model: b.impact_model,
+            flight: b.flight,
+            landing_restitution: b.landing_restitution as f32,
         },
         // Every field spelled out: a new field of the core fails to compile here instead of
         // silently keeping its f32 default (generalized-α once did).

@@ -17,7 +17,8 @@
 //! [beam]       # length [m], mass [kg], area [m²], modulus [Pa], inertia [m⁴]
 //! [tip]        # mass [kg], inertia [kg·m²], offset [m] (u_t2, centre below the beam end)
 //! [ball]       # mass, inertia, radius, track_radius, stop_angle_deg, restitution,
-//!              # stick_speed [rad/s], initial_angle_deg, impact_model = "over-step" | "instantaneous"
+//!              # stick_speed [rad/s], initial_angle_deg, impact_model = "over-step" | "instantaneous",
+//!              # friction, flight = true | false, landing_restitution
 //! [damping]    # stiffness_proportional [s], or ratio [-] at frequency [Hz]
 //! [integrator] # scheme (newmark | generalized-alpha), rho_inf, gamma, beta, step [s], tolerance, max_iterations
 //! [excitation] # type = "harmonic", amplitude [m], frequency [Hz]
@@ -172,6 +173,12 @@ pub struct BallSection {
     /// *Standard Handbook for Mechanical Engineers*, table of friction coefficients); default
     /// 0.5, the low end of dry steel.
     pub friction: f64,
+    /// The ball may leave the track when the track would have to pull it, fly inside the
+    /// housing and land again (default `true`; `false`: the paper's bilateral track).
+    pub flight: bool,
+    /// Coefficient of normal restitution of a landing on the track \[-\] (default 0.5, the
+    /// stops' value).
+    pub landing_restitution: f64,
 }
 
 /// `[damping]`: stiffness-proportional structural damping, off by default.
@@ -419,6 +426,8 @@ impl Default for BallSection {
                 ImpactModel::OverStep => ImpactSetting::OverStep,
             },
             friction: 0.5,
+            flight: p.flight,
+            landing_restitution: p.landing_restitution,
         }
     }
 }
@@ -673,6 +682,8 @@ impl Scene {
                     ImpactSetting::OverStep => ImpactModel::OverStep,
                     ImpactSetting::Instantaneous => ImpactModel::Instantaneous,
                 },
+                flight: b.flight,
+                landing_restitution: b.landing_restitution,
             },
             integrator: {
                 // Field by field, so that core fields without a scene key keep their default.
@@ -899,6 +910,7 @@ fn scene_key(field: &str, s: &Scene) -> (String, String) {
         "ball.track_radius" => (field.into(), v(f.ball.track_radius)),
         "ball.restitution" => (field.into(), v(f.ball.restitution)),
         "ball.stick_speed" => (field.into(), v(f.ball.stick_speed)),
+        "ball.landing_restitution" => (field.into(), v(f.ball.landing_restitution)),
         "integrator.gamma" => (field.into(), v(f.integrator.gamma)),
         "integrator.beta" => (field.into(), v(f.integrator.beta)),
         "integrator.step" => (field.into(), v(f.integrator.step)),

@@ -468,6 +468,8 @@ impl FullSolver {
                 Contact::OnStop(side) => {
                     Mode::Held(side.sign::<f64>() * self.params.ball.stop_angle)
                 }
+                // (not set by this solver: its ball stays on the track)
+                Contact::InFlight => Mode::Free,
             },
         }
     }
@@ -1359,6 +1361,8 @@ impl FullSolver {
             iterations: solved.iterations,
             increment: solved.increment,
             impact: None,
+            separation: None,
+            landing: None,
         };
         if self.scene.stops() {
             match next.contact {
@@ -1380,6 +1384,7 @@ impl FullSolver {
                         next.contact = Contact::Off;
                     }
                 }
+                Contact::InFlight => {}
             }
         }
         self.state = next;

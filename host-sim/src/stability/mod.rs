@@ -310,18 +310,7 @@ fn f64_of<T: Real>(x: T) -> f64 {
 impl<T: Real, S: Scene, const N: usize, const D: usize> Probe for CoreProbe<T, S, N, D> {
     fn step(&mut self, a: f64) -> Result<StepReport<f64>, Error> {
         let r = self.0.step(absorber_core::scalar::lit(a))?;
-        Ok(StepReport {
-            iterations: r.iterations,
-            increment: f64_of(r.increment),
-            impact: r.impact.map(|i| absorber_core::Impact {
-                time: f64_of(i.time),
-                side: i.side,
-                relative_speed: f64_of(i.relative_speed),
-                impulse: f64_of(i.impulse),
-                energy_loss: f64_of(i.energy_loss),
-                stuck: i.stuck,
-            }),
-        })
+        Ok(r.to_f64())
     }
     fn energy(&self) -> f64 {
         f64_of(self.0.energies(T::zero(), T::zero()).total())
@@ -359,6 +348,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Probe for CoreProbe<T, S
             absorber_core::Contact::Off => 0,
             absorber_core::Contact::OnStop(absorber_core::Side::Positive) => 1,
             absorber_core::Contact::OnStop(absorber_core::Side::Negative) => 2,
+            absorber_core::Contact::InFlight => 3,
         });
         (b, finite)
     }
@@ -470,6 +460,7 @@ impl Probe for FullProbe {
             absorber_core::Contact::Off => 0,
             absorber_core::Contact::OnStop(absorber_core::Side::Positive) => 1,
             absorber_core::Contact::OnStop(absorber_core::Side::Negative) => 2,
+            absorber_core::Contact::InFlight => 3,
         });
         (b, finite)
     }

@@ -1,0 +1,768 @@
+//! The ball leaves the track (issue 13): separation where the track would have to pull the
+//! ball, free flight inside the housing, landing, and the stops in flight (docs/model.md,
+//! "Contact and flight").
+//!
+//! The frame translates with the base: x along the undeformed beam from the clamp, y up,
+//! effective gravity `g_eff = g + ÿ_b`. `A` is the beam end (the track's centre), `ψ` the tip
+//! rotation, `ρ = R − r_b` the radius of the ball centre's circle, `R_tr = ρ + r_b`.
+//!
+//! **On the track** the ball rolls (the model of [`crate::tip`]): `c − A = ρ (sin θ, −cos θ)`,
+//! and the track's normal force on it, positive towards `A`, is
+//! `N = m_b [−ẍ_A sin θ + (ÿ_A + g_eff) cos θ + ρ θ̇²]` ([`crate::ContactForces`]).
+//!
+//! **Separation.** A real track only pushes. When a step ends with `N < 0` the ball left the
+//! track during it, at the fraction `τ = N₀ / (N₀ − N₁)` of the step (linear in `N`;
+//! [`separation_fraction`]): the step is redone as a rolling sub-step of `τh` and a flight
+//! sub-step of `(1 − τ)h`. Positions and velocities are continuous at the take-off.
+//!
+//! **Flight.** The ball is a free planar rigid body: its centre `c` follows
+//! `c̈ = (0, −g_eff(t))`, its spin rate `ω = φ̇` stays constant (no torque); the housing (beam and
+//! tip body) moves without it. Both are integrated by the scene's integrator with the same
+//! constants as every other unknown, so the full solver (`host-sim`), which releases the
+//! ball's constraints and integrates its coordinates, follows the same discrete path.
+//!
+//! **Landing** when the centre reaches the circle, `|c − A| = ρ` (crossing fraction: the cubic
+//! Hermite root of `d = |c − A| − ρ`, [`hermite_root`]). The centre is put on the circle, and
+//! with the normal speed `v_n = n·(ċ − Ȧ) > 0` (`n = (c − A)/|c − A|`):
+//! - **bounce** if `e_n v_n ≥ ρ ω_stick` (`e_n` = `ball.landing_restitution`, `ω_stick` =
+//!   `ball.stick_speed`, the stops' threshold as a speed) and the bounce's flight is longer than
+//!   a step ([`landing_bounces`]): a frictionless normal impulse
+//!   `P = (1 + e_n) v_n / K`, `K = 1/m_b + f_nᵀ M_h⁻¹ f_n` ([`bounce_impulse`]), on the ball `−P n`
+//!   and on the housing `P n` at `A` (`f_n`: the end node's position rows); the ball flies on;
+//! - otherwise a **plastic, rough landing**: rolling resumes, with the rolling velocities that
+//!   keep the generalized momentum, `M_roll v⁺ = Bᵀ M_fl v⁻` (`B` the rolling velocity map).
+//!   Written with the ball's momentum mismatch `Δ = m_b (ċ⁻ − ċ_roll(v⁻))`:
+//!   `v⁺ = v⁻ + M_roll⁻¹ B_bᵀ Δ` — one factorization of the rolling mass matrix. The impulse the
+//!   ball received, `J = m_b (ċ⁺ − ċ⁻)`, gives the normal and tangential impulses and the
+//!   friction the landing needed (reported; the model rolls on whatever it is).
+//!
+//! **Stops in flight**: when the ball's polar angle relative to the housing,
+//! `α_f = atan2(c_x − A_x, A_y − c_y) − ψ`, reaches `±α_max`, a frictionless impulse along
+//! `∇α_f` with the stops' restitution (plastic below `stick_speed`), the ball kept in flight.
+//!
+//! Impulses use the stops' metric ([`crate::ImpactModel`]): the step's Newmark matrix by default
+//! (an impulse in the mass-matrix metric kicks the housing's stiff end-rotation mode), the mass
+//! matrix for an instantaneous impact. At most one event
+//! splits a step; an event found at the end of the rest of the step is applied there.
+
+use crate::error::Error;
+use crate::model::{Contact, Impact, Side, State, StepReport};
+use crate::newton::Workspace;
+use crate::params::ImpactModel;
+use crate::scalar::{is_positive, lit, Real};
+use crate::scene::Scene;
+use crate::system::{Problem, System};
+use crate::tip::{self, Chain};
+use nalgebra::SVector;
+
+/// The ball's centre while it flies, in the frame translating with the base (x along the
+/// undeformed beam from the clamp, y up): position \[m\], velocity \[m/s\], acceleration
+/// \[m/s²\] and the generalized-α variable of the acceleration. Read only while the state's
+/// contact is [`Contact::InFlight`] (the spin is the state's φ, its rate ω = φ̇).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Flight<T> {
+    /// Centre c \[m\].
+    pub centre: [T; 2],
+    /// ċ \[m/s\].
+    pub velocity: [T; 2],
+    /// c̈ = (0, −g_eff) \[m/s²\].
+    pub accel: [T; 2],
+    /// The generalized-α scheme's acceleration-like variable (= `accel` for Newmark).
+    pub pseudo_accel: [T; 2],
+}
+
+impl<T: Real> Flight<T> {
+    /// All zero (the ball on the track).
+    pub fn zero() -> Self {
+        let z = [T::zero(); 2];
+        Self {
+            centre: z,
+            velocity: z,
+            accel: z,
+            pseudo_accel: z,
+        }
+    }
+}
+
+/// A landing of the ball on the track.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Landing<T> {
+    /// Time of the landing \[s\].
+    pub time: T,
+    /// Normal speed towards the track before the landing, `n·(ċ − Ȧ)` \[m/s\].
+    pub normal_speed: T,
+    /// Normal impulse of the track on the ball, towards A \[N·s\].
+    pub normal_impulse: T,
+    /// Tangential impulse of the track on the ball along `t = (cos θ, sin θ)` \[N·s\] (zero
+    /// for a bounce, which is frictionless).
+    pub tangential_impulse: T,
+    /// The ball bounced back into flight (else it rolls on).
+    pub bounced: bool,
+}
+
+impl<T: Real> Landing<T> {
+    /// The friction coefficient the landing needed, `|P_t| / P_n`; `None` without a normal
+    /// impulse.
+    pub fn required_friction(&self) -> Option<T> {
+        is_positive(self.normal_impulse)
+            .then(|| self.tangential_impulse.abs() / self.normal_impulse)
+    }
+}
+
+/// Fraction τ ∈ \[0, 1\] of a step at which the normal force, `n_start` at its start and
+/// `n_end < 0` at its end, crosses zero (linear in N); 0 when it was not positive at the start.
+pub fn separation_fraction<T: Real>(n_start: T, n_end: T) -> T {
+    if !is_positive(n_start) {
+        return T::zero();
+    }
+    let tau = n_start / (n_start - n_end);
+    if tau.is_finite() {
+        tau.max(T::zero()).min(T::one())
+    } else {
+        T::zero()
+    }
+}
+
+/// Fraction τ ∈ \[0, 1\] of a step at which a function with values `a0`, `a1` and scaled rates
+/// `d0 = ȧ₀h`, `d1 = ȧ₁h` at the step ends crosses zero: the root of its cubic Hermite
+/// interpolant (error O(h⁴)), by Newton from the linear root, six iterations at most. The stop
+/// crossing, the landing and the stops in flight of both solvers use it.
+pub fn hermite_root<T: Real>(a0: T, d0: T, a1: T, d1: T) -> T {
+    let (two, three, six) = (lit::<T>(2.0), lit::<T>(3.0), lit::<T>(6.0));
+    let linear = a0 / (a0 - a1);
+    let mut tau = if linear.is_finite() {
+        linear.max(T::zero()).min(T::one())
+    } else {
+        T::zero()
+    };
+    for _ in 0..6 {
+        let (t2, t3) = (tau * tau, tau * tau * tau);
+        let p = (two * t3 - three * t2 + T::one()) * a0
+            + (t3 - two * t2 + tau) * d0
+            + (three * t2 - two * t3) * a1
+            + (t3 - t2) * d1;
+        let dp = (six * t2 - six * tau) * (a0 - a1)
+            + (three * t2 - lit::<T>(4.0) * tau + T::one()) * d0
+            + (three * t2 - two * tau) * d1;
+        if !is_positive(dp.abs()) {
+            break;
+        }
+        let next = tau - p / dp;
+        if !next.is_finite() {
+            break;
+        }
+        tau = next.max(T::zero()).min(T::one());
+    }
+    tau
+}
+
+/// The landing bounces (the ball flies on) unless it is slow, `e_n v_n < v_stick`, or the
+/// bounce's flight would be shorter than a step: pressed onto the track at `a_p > 0`, a ball
+/// leaving it at `e_n v_n` returns after `2 e_n v_n / a_p`, which a step `h` cannot resolve
+/// when `2 e_n v_n < a_p h` (`pressed_over_step` = `a_p h` \[m/s\]). A ball skimming along the
+/// curved track would otherwise be found beyond the circle at every step end, with a normal
+/// speed of about `v_t² h / ρ` made by the step, and bounce for ever.
+pub fn landing_bounces<T: Real>(
+    restitution: T,
+    normal_speed: T,
+    stick: T,
+    pressed_over_step: T,
+) -> bool {
+    let rebound = restitution * normal_speed;
+    rebound >= stick && !(is_positive(pressed_over_step) && rebound + rebound < pressed_over_step)
+}
+
+/// Normal impulse of a frictionless bounce, `P = (1 + e_n) v_n / K` \[N·s\], with `K` the
+/// inverse effective mass along the normal \[1/kg\]: the normal speed becomes `−e_n v_n`.
+pub fn bounce_impulse<T: Real>(normal_speed: T, inverse_mass: T, restitution: T) -> T {
+    (T::one() + restitution) * normal_speed / inverse_mass
+}
+
+/// Polar angle of `d = c − A` from the downward vertical, `atan2(d_x, −d_y)` \[rad\] (the orbit
+/// angle θ of a ball on the track).
+pub fn polar_angle<T: Real>(d: [T; 2]) -> T {
+    d[0].atan2(-d[1])
+}
+
+/// `x` shifted by whole turns into `(−π, π]`.
+fn wrap<T: Real>(x: T) -> T {
+    let two_pi = T::two_pi();
+    let k = (x / two_pi).round();
+    x - k * two_pi
+}
+
+/// The kinematics of the ball relative to the track's centre.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Relative<T> {
+    /// c − A \[m\].
+    pub d: [T; 2],
+    /// ċ − Ȧ \[m/s\].
+    pub rate: [T; 2],
+    /// |c − A| \[m\].
+    pub r: T,
+}
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
+    /// The beam end A and its velocity in the base frame (the clamp at the origin).
+    pub(crate) fn end_point(&self, s: &State<T, D>) -> ([T; 2], [T; 2]) {
+        let at = |x: &SVector<T, D>, k: usize| x.get(Self::END + k).copied().unwrap_or(T::zero());
+        (
+            [self.params.beam.length + at(&s.q, 0), at(&s.q, 1)],
+            [at(&s.v, 0), at(&s.v, 1)],
+        )
+    }
+
+    /// The ball's centre and its velocity: on the track from the rolling kinematics
+    /// `c = A + ρ (sin θ, −cos θ)`, `ċ = Ȧ + ρ θ̇ (cos θ, sin θ)`, in flight the flying state.
+    pub(crate) fn ball_centre(&self, s: &State<T, D>) -> ([T; 2], [T; 2]) {
+        if s.contact == Contact::InFlight {
+            return (s.flight.centre, s.flight.velocity);
+        }
+        let (a, a_rate) = self.end_point(s);
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (theta, theta_rate) = tip::orbit_angle(&self.inertia, &x);
+        let (sin, cos) = theta.fast_sin_cos();
+        let rho = self.params.ball.path_radius();
+        (
+            [a[0] + rho * sin, a[1] - rho * cos],
+            [
+                a_rate[0] + rho * theta_rate * cos,
+                a_rate[1] + rho * theta_rate * sin,
+            ],
+        )
+    }
+
+    /// The flying ball relative to the track's centre.
+    pub(crate) fn relative(&self, s: &State<T, D>) -> Relative<T> {
+        let (a, a_rate) = self.end_point(s);
+        let f = &s.flight;
+        let d = [f.centre[0] - a[0], f.centre[1] - a[1]];
+        Relative {
+            d,
+            rate: [f.velocity[0] - a_rate[0], f.velocity[1] - a_rate[1]],
+            r: (d[0] * d[0] + d[1] * d[1]).sqrt(),
+        }
+    }
+
+    /// Polar angle of the flying ball relative to the housing, `α_f = θ_f − ψ` on the branch
+    /// of `(−π, π]`, and its rate `t_f·(ċ − Ȧ)/r − ψ̇`.
+    pub(crate) fn flight_relative_angle(&self, s: &State<T, D>) -> (T, T) {
+        let rel = self.relative(s);
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, psi_rate) = tip::psi_and_rate(&x);
+        let alpha = wrap(polar_angle(rel.d) - psi);
+        // (cos θ_f, sin θ_f) = (−d_y, d_x)/r.
+        let tangential = (-rel.d[1] * rel.rate[0] + rel.d[0] * rel.rate[1]) / (rel.r * rel.r);
+        (alpha, tangential - psi_rate)
+    }
+
+    /// The flight sub-step of the ball's centre over `h`, to the effective gravity `g_end` at
+    /// its end: the scene's integrator ([`crate::newmark`]) with the known acceleration
+    /// `(0, −g_end)` as its unknown.
+    pub(crate) fn fly(&self, f: &Flight<T>, h: T, g_end: T) -> Flight<T> {
+        let i = &self.params.integrator;
+        let half = lit::<T>(0.5);
+        let ch = self.newmark_chain(h);
+        let x = [T::zero(), -g_end];
+        let mut next = *f;
+        for k in 0..2 {
+            let pseudo = if self.alpha.is_some() {
+                f.pseudo_accel[k]
+            } else {
+                f.accel[k]
+            };
+            let mut q = f.centre[k] + h * f.velocity[k] + h * h * (half - i.beta) * pseudo;
+            let mut v = f.velocity[k] + h * (T::one() - i.gamma) * pseudo;
+            let mut pa = x[k];
+            if let Some(g) = &self.alpha {
+                let known = g.from_accel * f.accel[k] + g.from_pseudo * f.pseudo_accel[k];
+                q += i.beta * h * h * known;
+                v += i.gamma * h * known;
+                pa = known + g.ratio * x[k];
+            }
+            next.centre[k] = q + ch.c_q * x[k];
+            next.velocity[k] = v + ch.c_v * x[k];
+            next.accel[k] = x[k];
+            next.pseudo_accel[k] = pa;
+        }
+        next
+    }
+
+    /// The normal force of the track on a rolling ball (`N` of [`crate::ContactForces`]) \[N\];
+    /// zero in flight. One `atan2` (ψ) and one `sin_cos` (θ).
+    pub(crate) fn normal_force(&self, s: &State<T, D>) -> T {
+        self.track_forces(s).0
+    }
+
+    /// `(N, F_t)` of the track on the ball (module doc; zero in flight).
+    pub(crate) fn track_forces(&self, s: &State<T, D>) -> (T, T) {
+        if s.contact == Contact::InFlight {
+            return (T::zero(), T::zero());
+        }
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, psi_rate, psi_accel) = tip::psi_all(&x);
+        let i = &self.inertia;
+        let theta = i.orbit_per_tilt * psi - i.orbit_per_spin * x.q[4];
+        let theta_rate = i.orbit_per_tilt * psi_rate - i.orbit_per_spin * x.v[4];
+        let theta_accel = i.orbit_per_tilt * psi_accel - i.orbit_per_spin * x.a[4];
+        let (sin, cos) = theta.fast_sin_cos();
+        let ball = &self.params.ball;
+        let rho = ball.path_radius();
+        let (xa, ya_g) = (x.a[0], x.a[1] + self.effective_gravity(s.base_accel));
+        (
+            ball.mass * (-xa * sin + ya_g * cos + rho * theta_rate * theta_rate),
+            ball.mass * (xa * cos + ya_g * sin + rho * theta_accel),
+        )
+    }
+
+    /// The ball leaves the track if the step from `start` to `next` (rolling, no stop impact)
+    /// ends with the track pulling it: the step is redone as a rolling sub-step to the
+    /// separation and a flight sub-step for the rest (module doc).
+    pub(crate) fn separation(
+        &self,
+        start: &State<T, D>,
+        next: State<T, D>,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<State<T, D>, Error> {
+        let n_end = self.normal_force(&next);
+        if !(n_end < T::zero()) {
+            return Ok(next);
+        }
+        let kind = self.params.integrator.newton;
+        let h = self.params.integrator.step;
+        let tau = separation_fraction(self.normal_force(start), n_end);
+        let h1 = tau * h;
+        let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
+        let mut mid = if h1 > h * lit(1e-6) {
+            let (m, s) = self.newmark(start, h1, accel_mid, ws, kind)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            m
+        } else {
+            *start
+        };
+        mid.time = start.time + h1;
+        self.take_off(&mut mid, ws, report)?;
+        report.separation = Some(mid.time);
+        self.flight_rest(&mid, h - h1, base_accel, ws, report)
+    }
+
+    /// The rolling ball leaves the track at `s`: the flying state from the rolling kinematics
+    /// (continuous), then the consistent acceleration of the flight mode.
+    fn take_off(
+        &self,
+        s: &mut State<T, D>,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<(), Error> {
+        let (c, c_rate) = self.ball_centre(s);
+        let g = [T::zero(), -self.effective_gravity(s.base_accel)];
+        s.flight = Flight {
+            centre: c,
+            velocity: c_rate,
+            accel: g,
+            pseudo_accel: g,
+        };
+        s.contact = Contact::InFlight;
+        self.restart_acceleration(s, ws, report)
+    }
+
+    /// The consistent acceleration after a jump of velocity or mode; the generalized-α
+    /// recursion restarts from it.
+    fn restart_acceleration(
+        &self,
+        s: &mut State<T, D>,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<(), Error> {
+        let acc = self.consistent_acceleration(s, ws, self.params.integrator.newton)?;
+        report.iterations += acc.iterations;
+        s.a = acc.x;
+        s.pseudo_accel = s.a;
+        if s.contact == Contact::InFlight {
+            s.flight.pseudo_accel = s.flight.accel;
+        }
+        Ok(())
+    }
+
+    /// The rest `h_rest` of a step after an event at `mid`, in the mode the event left, to the
+    /// input `base_accel`; an event at its end is applied there (no further split).
+    fn flight_rest(
+        &self,
+        mid: &State<T, D>,
+        h_rest: T,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<State<T, D>, Error> {
+        let h = self.params.integrator.step;
+        let mut end = if h_rest > h * lit(1e-6) {
+            let (e, s) =
+                self.newmark(mid, h_rest, base_accel, ws, self.params.integrator.newton)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            e
+        } else {
+            *mid
+        };
+        if end.contact == Contact::InFlight {
+            if S::STOPS {
+                let (alpha, _) = self.flight_relative_angle(&end);
+                if alpha.abs() > self.params.ball.stop_angle {
+                    let side = if is_positive(alpha) {
+                        Side::Positive
+                    } else {
+                        Side::Negative
+                    };
+                    let impact = self.stop_in_flight(&mut end, side, ws, report)?;
+                    report.impact = report.impact.or(Some(impact));
+                }
+            }
+            if self.relative(&end).r > self.params.ball.path_radius() {
+                self.land(&mut end, ws, report)?;
+            }
+        } else if S::STOPS && self.relative_angle(&end).abs() > self.params.ball.stop_angle {
+            // Landed and rolled onto a stop within the rest: it rests there (plastic).
+            self.rest_on_stop(&mut end, ws, report)?;
+        }
+        Ok(end)
+    }
+
+    /// The events of a flight step from `start` whose trial end is `trial`: a landing or a stop,
+    /// whichever comes first, splits the step (module doc).
+    pub(crate) fn flight_events(
+        &self,
+        start: &State<T, D>,
+        trial: State<T, D>,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<State<T, D>, Error> {
+        let h = self.params.integrator.step;
+        let rho = self.params.ball.path_radius();
+        let mut tau = T::one();
+        let mut event = None;
+        let end_rel = self.relative(&trial);
+        if end_rel.r > rho {
+            let (r0, r1) = (self.relative(start), end_rel);
+            let rate = |r: &Relative<T>| (r.d[0] * r.rate[0] + r.d[1] * r.rate[1]) / r.r;
+            tau = hermite_root(r0.r - rho, rate(&r0) * h, r1.r - rho, rate(&r1) * h);
+            event = Some(None);
+        }
+        if S::STOPS {
+            let stop = self.params.ball.stop_angle;
+            let (alpha1, rate1) = self.flight_relative_angle(&trial);
+            if alpha1.abs() > stop {
+                let side = if is_positive(alpha1) {
+                    Side::Positive
+                } else {
+                    Side::Negative
+                };
+                let target = side.sign::<T>() * stop;
+                let (alpha0, rate0) = self.flight_relative_angle(start);
+                let t = hermite_root(alpha0 - target, rate0 * h, alpha1 - target, rate1 * h);
+                if event.is_none() || t < tau {
+                    tau = t;
+                    event = Some(Some(side));
+                }
+            }
+        }
+        let Some(event) = event else {
+            return Ok(trial);
+        };
+        let h1 = tau * h;
+        let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
+        let mut mid = if h1 > h * lit(1e-6) {
+            let (m, s) = self.newmark(start, h1, accel_mid, ws, self.params.integrator.newton)?;
+            report.iterations += s.iterations;
+            report.increment = report.increment.max(s.increment);
+            m
+        } else {
+            *start
+        };
+        mid.time = start.time + h1;
+        match event {
+            None => self.land(&mut mid, ws, report)?,
+            Some(side) => {
+                let impact = self.stop_in_flight(&mut mid, side, ws, report)?;
+                report.impact = Some(impact);
+            }
+        }
+        self.flight_rest(&mid, h - h1, base_accel, ws, report)
+    }
+
+    /// Factors the impulse metric of the mode `contact` at the configuration of `s`: the
+    /// Newmark matrix `W = M + γhC + βh²K` of a whole step ([`ImpactModel::OverStep`], as the
+    /// stops: the impulse spread over the step does not kick the housing's stiff end-rotation
+    /// mode), or the mass matrix ([`ImpactModel::Instantaneous`]).
+    fn metric_factors(
+        &self,
+        s: &State<T, D>,
+        contact: Contact,
+        ws: &mut Workspace<T, D>,
+    ) -> Result<(), Error> {
+        let zero = SVector::zeros();
+        let ch = if self.params.ball.impact_model == ImpactModel::OverStep {
+            self.newmark_chain(self.params.integrator.step)
+        } else {
+            Chain {
+                c_q: T::zero(),
+                c_v: T::zero(),
+                c_m: T::one(),
+            }
+        };
+        let p = Problem {
+            q0: &s.q,
+            v0: &s.v,
+            a0: &zero,
+            ch,
+            c_pos: T::one(),
+            g_eff: self.effective_gravity(s.base_accel),
+            contact,
+            plumb: false,
+        };
+        let mut r = SVector::zeros();
+        self.refresh_at(&p, &[s.q, s.v, s.a], ws, &mut r)
+    }
+
+    /// The landing at the crossing `s` (module doc): the centre put on the circle, then a
+    /// bounce or a plastic, rough landing.
+    fn land(
+        &self,
+        s: &mut State<T, D>,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<(), Error> {
+        let ball = &self.params.ball;
+        let rho = ball.path_radius();
+        let rel = self.relative(s);
+        if !is_positive(rel.r) {
+            return Err(Error::NonFiniteState);
+        }
+        let n = [rel.d[0] / rel.r, rel.d[1] / rel.r];
+        let (a, _) = self.end_point(s);
+        s.flight.centre = [a[0] + rho * n[0], a[1] + rho * n[1]];
+        let normal_speed = n[0] * rel.rate[0] + n[1] * rel.rate[1];
+        if !is_positive(normal_speed) {
+            return Ok(()); // grazing: no impulse, the ball flies on
+        }
+        let mut landing = Landing {
+            time: s.time,
+            normal_speed,
+            normal_impulse: T::zero(),
+            tangential_impulse: T::zero(),
+            bounced: false,
+        };
+        let before = s.flight.velocity;
+        // The ball is pressed onto the track at a_p = ((0, −g_eff) − Ä)·n + v_t²/ρ.
+        let accel_end = [
+            s.a.get(Self::END).copied().unwrap_or(T::zero()),
+            s.a.get(Self::END + 1).copied().unwrap_or(T::zero()),
+        ];
+        let tangential = n[0] * rel.rate[1] - n[1] * rel.rate[0];
+        let pressed = (-self.effective_gravity(s.base_accel) - accel_end[1]) * n[1]
+            - accel_end[0] * n[0]
+            + tangential * tangential / rho;
+        let bounces = landing_bounces(
+            ball.landing_restitution,
+            normal_speed,
+            rho * ball.stick_speed,
+            pressed * self.params.integrator.step,
+        );
+        if bounces {
+            self.metric_factors(s, Contact::InFlight, ws)?;
+            let mut y = SVector::<T, D>::zeros();
+            self.put_end(&mut y, [n[0], n[1], T::zero(), T::zero()]);
+            ws.solve(&mut y)?;
+            let k = T::one() / ball.mass + self.end_dot(&y, [n[0], n[1], T::zero(), T::zero()]);
+            if !is_positive(k) {
+                return Err(Error::Singular);
+            }
+            let p = bounce_impulse(normal_speed, k, ball.landing_restitution);
+            s.v.axpy(p, &y, T::one());
+            for (c, nk) in s.flight.velocity.iter_mut().zip(n.iter()) {
+                *c -= p / ball.mass * *nk;
+            }
+            landing.normal_impulse = p;
+            landing.bounced = true;
+        } else {
+            // θ on the branch of ψ, and φ re-based so that r_b φ = R_tr ψ − ρ θ.
+            let x = Self::local(&s.q, &s.v, &s.a);
+            let (psi, _) = tip::psi_and_rate(&x);
+            let theta = psi + wrap(polar_angle(n) - psi);
+            let i = &self.inertia;
+            if let Some(spin) = s.q.get_mut(Self::SPIN) {
+                *spin = (i.orbit_per_tilt * psi - theta) / i.orbit_per_spin;
+            }
+            s.contact = Contact::Off;
+            // v⁺ = v⁻ + M_roll⁻¹ B_bᵀ Δ, Δ = m_b (ċ⁻ − ċ_roll(v⁻)).
+            let (_, rolling) = self.ball_centre(s);
+            let delta = [
+                ball.mass * (before[0] - rolling[0]),
+                ball.mass * (before[1] - rolling[1]),
+            ];
+            let (sin, cos) = theta.fast_sin_cos();
+            let along = cos * delta[0] + sin * delta[1];
+            let a3 = T::one() + x.q[2];
+            let a4 = x.q[3];
+            let s2 = a3 * a3 + a4 * a4;
+            let w = rho * i.orbit_per_tilt * along / s2;
+            let mut y = SVector::<T, D>::zeros();
+            self.put_end(&mut y, [delta[0], delta[1], -w * a4, w * a3]);
+            if let Some(spin) = y.get_mut(Self::SPIN) {
+                *spin = -rho * i.orbit_per_spin * along;
+            }
+            self.metric_factors(s, Contact::Off, ws)?;
+            ws.solve(&mut y)?;
+            s.v += y;
+            let (_, after) = self.ball_centre(s);
+            let jx = ball.mass * (after[0] - before[0]);
+            let jy = ball.mass * (after[1] - before[1]);
+            landing.normal_impulse = -(n[0] * jx + n[1] * jy);
+            landing.tangential_impulse = cos * jx + sin * jy;
+        }
+        report.landing = Some(landing);
+        self.restart_acceleration(s, ws, report)
+    }
+
+    /// A stop hit by the flying ball at `s` (module doc): the centre rotated about A onto the
+    /// stop line, a frictionless impulse along `∇α_f`; the ball flies on.
+    fn stop_in_flight(
+        &self,
+        s: &mut State<T, D>,
+        side: Side,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<Impact<T>, Error> {
+        let ball = &self.params.ball;
+        let x = Self::local(&s.q, &s.v, &s.a);
+        let (psi, _) = tip::psi_and_rate(&x);
+        let rel = self.relative(s);
+        let theta = psi + side.sign::<T>() * ball.stop_angle;
+        let (sin, cos) = theta.fast_sin_cos();
+        let (a, _) = self.end_point(s);
+        s.flight.centre = [a[0] + rel.r * sin, a[1] - rel.r * cos];
+        let (_, speed) = self.flight_relative_angle(s);
+        let mut impact = Impact {
+            time: s.time,
+            side,
+            relative_speed: speed,
+            impulse: T::zero(),
+            energy_loss: T::zero(),
+            stuck: false,
+        };
+        if side.sign::<T>() * speed > T::zero() {
+            let e = if speed.abs() < ball.stick_speed {
+                T::zero()
+            } else {
+                ball.restitution
+            };
+            // ∇α_f on the housing: −t_f/r on A, −∂ψ/∂(a₃, a₄) = −(−a₄, a₃)/s² on the slope.
+            let a3 = T::one() + x.q[2];
+            let a4 = x.q[3];
+            let s2 = a3 * a3 + a4 * a4;
+            let grad = [-cos / rel.r, -sin / rel.r, a4 / s2, -a3 / s2];
+            self.metric_factors(s, Contact::InFlight, ws)?;
+            let mut y = SVector::<T, D>::zeros();
+            self.put_end(&mut y, grad);
+            ws.solve(&mut y)?;
+            let k = T::one() / (ball.mass * rel.r * rel.r) + self.end_dot(&y, grad);
+            if !is_positive(k) {
+                return Err(Error::Singular);
+            }
+            let lambda = -(T::one() + e) * speed / k;
+            s.v.axpy(lambda, &y, T::one());
+            let dv = lambda / (ball.mass * rel.r);
+            s.flight.velocity[0] += dv * cos;
+            s.flight.velocity[1] += dv * sin;
+            impact.impulse = lambda / rel.r;
+            impact.energy_loss = lit::<T>(0.5) * (T::one() - e * e) * speed * speed / k;
+        }
+        self.restart_acceleration(s, ws, report)?;
+        Ok(impact)
+    }
+
+    /// `y[END..END+4] = v` (the end node's coordinates).
+    fn put_end(&self, y: &mut SVector<T, D>, v: [T; 4]) {
+        if let Some(dst) = y.as_mut_slice().get_mut(Self::END..Self::END + 4) {
+            for (d, x) in dst.iter_mut().zip(v.iter()) {
+                *d = *x;
+            }
+        }
+    }
+
+    /// `y[END..END+4] · v`.
+    fn end_dot(&self, y: &SVector<T, D>, v: [T; 4]) -> T {
+        let mut sum = T::zero();
+        if let Some(src) = y.as_slice().get(Self::END..Self::END + 4) {
+            for (a, b) in src.iter().zip(v.iter()) {
+                sum += *a * *b;
+            }
+        }
+        sum
+    }
+
+    /// A rolling ball beyond a stop at the end of a step's rest: held on it (plastic), released
+    /// at once if the stop would pull.
+    pub(crate) fn rest_on_stop(
+        &self,
+        end: &mut State<T, D>,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<(), Error> {
+        let side = if self.relative_angle(end) > T::zero() {
+            Side::Positive
+        } else {
+            Side::Negative
+        };
+        self.hold_on_stop(end, side);
+        end.contact = Contact::OnStop(side);
+        let acc = self.consistent_acceleration(end, ws, self.params.integrator.newton)?;
+        report.iterations += acc.iterations;
+        end.a = acc.x;
+        end.pseudo_accel = end.a;
+        if side.sign::<T>() * self.contact_force(end) > T::zero() {
+            end.contact = Contact::Off;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn separation_fraction_is_the_linear_zero_and_zero_without_positive_start() {
+        assert_eq!(separation_fraction(1.0f64, -3.0), 0.25);
+        assert_eq!(separation_fraction(0.0f64, -3.0), 0.0);
+        assert_eq!(separation_fraction(-1.0f64, -3.0), 0.0);
+    }
+
+    #[test]
+    fn hermite_root_is_exact_for_a_cubic() {
+        // f(τ) = (τ − 0.3)(1 + τ²): values and scaled rates at both ends.
+        let f = |t: f64| (t - 0.3) * (1.0 + t * t);
+        let df = |t: f64| (1.0 + t * t) + 2.0 * t * (t - 0.3);
+        let tau = hermite_root(f(0.0), df(0.0), f(1.0), df(1.0));
+        assert!((tau - 0.3).abs() < 1e-12, "{tau}");
+    }
+
+    #[test]
+    fn bounce_impulse_reverses_normal_speed() {
+        let (v, k, e) = (0.2f64, 1.0 / 0.014 + 3.0, 0.5);
+        let p = bounce_impulse(v, k, e);
+        assert!((v - p * k + e * v).abs() < 1e-15);
+        assert!(landing_bounces(0.5, 0.01, 0.0008, 0.0));
+        assert!(!landing_bounces(0.0, 0.01, 0.0008, 0.0));
+        // Pressed at 15 m/s² over 3 ms: a rebound at 5 mm/s is back within 0.7 ms.
+        assert!(!landing_bounces(0.5, 0.01, 0.0008, 0.045));
+        assert!(landing_bounces(0.5, 0.1, 0.0008, 0.045));
+        assert!(
+            landing_bounces(1.0, 0.1, 0.0, 0.045),
+            "elastic, a flight of 13 ms"
+        );
+    }
+}
