@@ -36,9 +36,13 @@
 //!   ball received, `J = m_b (ċ⁺ − ċ⁻)`, gives the normal and tangential impulses and the
 //!   friction the landing needed (reported; the model rolls on whatever it is).
 //!
-//! **Stops in flight**: when the ball's polar angle relative to the housing,
-//! `α_f = atan2(c_x − A_x, A_y − c_y) − ψ`, reaches `±α_max`, a frictionless impulse along
-//! `∇α_f` with the stops' restitution (plastic below `stick_speed`), the ball kept in flight.
+//! **Stops in flight**: a stop is a block on the track as tall as the ball's radius, so the
+//! flying ball meets it where its centre is beyond `ρ − r_b` from A and its polar angle relative
+//! to the housing, `α_f = atan2(c_x − A_x, A_y − c_y) − ψ`, reaches `±α_max`: a frictionless
+//! impulse along `∇α_f` with the stops' restitution (plastic below `stick_speed`), the ball
+//! kept in flight; the crossing is detected when the ball is at the stops' height at both ends
+//! of a step, from either face. Nearer the centre the ball flies over the stops, onto the arc
+//! beyond them, where the model has no track to roll on: a landing there always bounces.
 //!
 //! Impulses use the stops' metric ([`crate::ImpactModel`]): the step's Newmark matrix by default
 //! (an impulse in the mass-matrix metric kicks the housing's stiff end-rotation mode), the mass
@@ -161,7 +165,8 @@ pub fn hermite_root<T: Real>(a0: T, d0: T, a1: T, d1: T) -> T {
 /// leaving it at `e_n v_n` returns after `2 e_n v_n / a_p`, which a step `h` cannot resolve
 /// when `2 e_n v_n < a_p h` (`pressed_over_step` = `a_p h` \[m/s\]). A ball skimming along the
 /// curved track would otherwise be found beyond the circle at every step end, with a normal
-/// speed of about `v_t² h / ρ` made by the step, and bounce for ever.
+/// speed of about `v_t² h / ρ` made by the step, and bounce for ever. A perfectly elastic
+/// landing (`e_n = 1`) always bounces: nothing would end its bounces.
 pub fn landing_bounces<T: Real>(
     restitution: T,
     normal_speed: T,
@@ -169,7 +174,9 @@ pub fn landing_bounces<T: Real>(
     pressed_over_step: T,
 ) -> bool {
     let rebound = restitution * normal_speed;
-    rebound >= stick && !(is_positive(pressed_over_step) && rebound + rebound < pressed_over_step)
+    let elastic = restitution >= T::one();
+    rebound >= stick
+        && (elastic || !(is_positive(pressed_over_step) && rebound + rebound < pressed_over_step))
 }
 
 /// Normal impulse of a frictionless bounce, `P = (1 + e_n) v_n / K` \[N·s\], with `K` the
@@ -254,6 +261,45 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         // (cos θ_f, sin θ_f) = (−d_y, d_x)/r.
         let tangential = (-rel.d[1] * rel.rate[0] + rel.d[0] * rel.rate[1]) / (rel.r * rel.r);
         (alpha, tangential - psi_rate)
+    }
+
+    /// The flying ball reaches the stops' height: its centre is beyond `ρ − r_b` from A (a stop
+    /// is a block on the track as tall as the ball's radius; nearer the centre the ball passes
+    /// over it).
+    pub(crate) fn at_stop_height(&self, s: &State<T, D>) -> bool {
+        let b = &self.params.ball;
+        self.relative(s).r > b.path_radius() - b.radius
+    }
+
+    /// A stop met by the flying ball between `from` and `to`: at the stops' height at both
+    /// ends, its polar angle crossed `±α_max` (from the track's side, `inside`, or from the arc
+    /// beyond the stop); the side, `inside` and the crossing fraction (cubic Hermite).
+    pub(crate) fn stop_crossing(
+        &self,
+        from: &State<T, D>,
+        to: &State<T, D>,
+    ) -> Option<(Side, bool, T)> {
+        if !S::STOPS || !self.at_stop_height(from) || !self.at_stop_height(to) {
+            return None;
+        }
+        let stop = self.params.ball.stop_angle;
+        let (alpha0, rate0) = self.flight_relative_angle(from);
+        let (raw1, rate1) = self.flight_relative_angle(to);
+        let alpha1 = alpha0 + wrap(raw1 - alpha0);
+        let inside = alpha0.abs() <= stop;
+        if inside == (alpha1.abs() <= stop) {
+            return None;
+        }
+        let outer = if inside { alpha1 } else { alpha0 };
+        let side = if is_positive(outer) {
+            Side::Positive
+        } else {
+            Side::Negative
+        };
+        let target = side.sign::<T>() * stop;
+        let h = self.params.integrator.step;
+        let tau = hermite_root(alpha0 - target, rate0 * h, alpha1 - target, rate1 * h);
+        Some((side, inside, tau))
     }
 
     /// The flight sub-step of the ball's centre over `h`, to the effective gravity `g_end` at
@@ -408,17 +454,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             *mid
         };
         if end.contact == Contact::InFlight {
-            if S::STOPS {
-                let (alpha, _) = self.flight_relative_angle(&end);
-                if alpha.abs() > self.params.ball.stop_angle {
-                    let side = if is_positive(alpha) {
-                        Side::Positive
-                    } else {
-                        Side::Negative
-                    };
-                    let impact = self.stop_in_flight(&mut end, side, ws, report)?;
-                    report.impact = report.impact.or(Some(impact));
-                }
+            if let Some((side, inside, _)) = self.stop_crossing(mid, &end) {
+                let impact = self.stop_in_flight(&mut end, side, inside, ws, report)?;
+                report.impact = report.impact.or(Some(impact));
             }
             if self.relative(&end).r > self.params.ball.path_radius() {
                 self.land(&mut end, ws, report)?;
@@ -451,22 +489,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             tau = hermite_root(r0.r - rho, rate(&r0) * h, r1.r - rho, rate(&r1) * h);
             event = Some(None);
         }
-        if S::STOPS {
-            let stop = self.params.ball.stop_angle;
-            let (alpha1, rate1) = self.flight_relative_angle(&trial);
-            if alpha1.abs() > stop {
-                let side = if is_positive(alpha1) {
-                    Side::Positive
-                } else {
-                    Side::Negative
-                };
-                let target = side.sign::<T>() * stop;
-                let (alpha0, rate0) = self.flight_relative_angle(start);
-                let t = hermite_root(alpha0 - target, rate0 * h, alpha1 - target, rate1 * h);
-                if event.is_none() || t < tau {
-                    tau = t;
-                    event = Some(Some(side));
-                }
+        if let Some((side, inside, t)) = self.stop_crossing(start, &trial) {
+            if event.is_none() || t < tau {
+                tau = t;
+                event = Some(Some((side, inside)));
             }
         }
         let Some(event) = event else {
@@ -485,8 +511,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         mid.time = start.time + h1;
         match event {
             None => self.land(&mut mid, ws, report)?,
-            Some(side) => {
-                let impact = self.stop_in_flight(&mut mid, side, ws, report)?;
+            Some((side, inside)) => {
+                let impact = self.stop_in_flight(&mut mid, side, inside, ws, report)?;
                 report.impact = Some(impact);
             }
         }
@@ -565,12 +591,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let pressed = (-self.effective_gravity(s.base_accel) - accel_end[1]) * n[1]
             - accel_end[0] * n[0]
             + tangential * tangential / rho;
-        let bounces = landing_bounces(
-            ball.landing_restitution,
-            normal_speed,
-            rho * ball.stick_speed,
-            pressed * self.params.integrator.step,
-        );
+        // Beyond the stops there is no track to roll on: a landing there always bounces.
+        let beyond = S::STOPS && {
+            let (alpha, _) = self.flight_relative_angle(s);
+            alpha.abs() > ball.stop_angle
+        };
+        let bounces = beyond
+            || landing_bounces(
+                ball.landing_restitution,
+                normal_speed,
+                rho * ball.stick_speed,
+                pressed * self.params.integrator.step,
+            );
         if bounces {
             self.metric_factors(s, Contact::InFlight, ws)?;
             let mut y = SVector::<T, D>::zeros();
@@ -633,6 +665,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         &self,
         s: &mut State<T, D>,
         side: Side,
+        inside: bool,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
     ) -> Result<Impact<T>, Error> {
@@ -653,7 +686,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             energy_loss: T::zero(),
             stuck: false,
         };
-        if side.sign::<T>() * speed > T::zero() {
+        // Towards the stop's face: outwards from the track's side, inwards from beyond.
+        let towards = if inside {
+            side.sign::<T>() * speed
+        } else {
+            -side.sign::<T>() * speed
+        };
+        if towards > T::zero() {
             let e = if speed.abs() < ball.stick_speed {
                 T::zero()
             } else {
@@ -733,6 +772,83 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::{FreeBall, ImpactModel, Model, Params};
+
+    /// A flying state on the circle at 40° from the bottom, moving outwards at 0.3 m/s and
+    /// along the track at 0.2 m/s relative to a moving housing.
+    fn at_landing(e_n: f64) -> (Model<f64, FreeBall, 3, 13>, State<f64, 13>) {
+        let mut p = Params::<f64>::default();
+        p.ball.landing_restitution = e_n;
+        p.ball.impact_model = ImpactModel::Instantaneous;
+        let m = Model::<f64, FreeBall, 3, 13>::at_rest(p, 0.0).expect("start");
+        let mut s = m.state;
+        for i in 0..12 {
+            s.v[i] = 0.05 * ((i as f64) * 1.7).sin();
+        }
+        s.v[12] = 3.0;
+        let (a, a_rate) = m.sys.end_point(&s);
+        let rho = p.ball.path_radius();
+        let th = 40f64.to_radians();
+        let (n, t) = ([th.sin(), -th.cos()], [th.cos(), th.sin()]);
+        s.contact = Contact::InFlight;
+        s.flight.centre = [a[0] + rho * n[0], a[1] + rho * n[1]];
+        s.flight.velocity = [
+            a_rate[0] + 0.3 * n[0] + 0.2 * t[0],
+            a_rate[1] + 0.3 * n[1] + 0.2 * t[1],
+        ];
+        (m, s)
+    }
+
+    fn kinetic(m: &mut Model<f64, FreeBall, 3, 13>, s: &State<f64, 13>) -> f64 {
+        m.state = *s;
+        let e = m.energies(0.0, 0.0);
+        e.beam_kinetic + e.tip_kinetic + e.ball_kinetic
+    }
+
+    /// The landing operator alone. Elastic (e_n = 1): the normal speed reverses and the
+    /// kinetic energy is unchanged to rounding (1e-12 of it). Plastic (e_n = 0): the ball rolls
+    /// on (its centre velocity is the rolling kinematics' and has no normal component), the
+    /// track pushed (P_n > 0), and kinetic energy was lost, at most the normal part m_b v_n²/2
+    /// plus the slip's.
+    #[test]
+    fn landing_operator_conserves_energy_when_elastic_and_rolls_on_when_plastic() {
+        let (mut m, s0) = at_landing(1.0);
+        let before = kinetic(&mut m, &s0);
+        let mut s = s0;
+        let mut ws = Workspace::default();
+        let mut report = StepReport {
+            iterations: 0,
+            increment: 0.0,
+            impact: None,
+            separation: None,
+            landing: None,
+        };
+        m.sys.land(&mut s, &mut ws, &mut report).expect("land");
+        let l = report.landing.expect("landed");
+        assert!(l.bounced && (l.normal_speed - 0.3).abs() < 1e-12);
+        let after = kinetic(&mut m, &s);
+        assert!((after - before).abs() < 1e-12 * before, "{before} → {after}");
+        let rel = m.sys.relative(&s);
+        let vn = (rel.d[0] * rel.rate[0] + rel.d[1] * rel.rate[1]) / rel.r;
+        assert!((vn + 0.3).abs() < 1e-12, "{vn}");
+
+        let (mut m, s0) = at_landing(0.0);
+        let before = kinetic(&mut m, &s0);
+        let mut s = s0;
+        report.landing = None;
+        m.sys.land(&mut s, &mut ws, &mut report).expect("land");
+        let l = report.landing.expect("landed");
+        assert!(!l.bounced && s.contact == Contact::Off);
+        assert!(l.normal_impulse > 0.0);
+        let after = kinetic(&mut m, &s);
+        assert!(after < before && before - after < 0.5 * 0.014 * (0.3f64 * 0.3 + 0.2 * 0.2));
+        let (c, cd) = m.sys.ball_centre(&s);
+        let (a, ad) = m.sys.end_point(&s);
+        let n = [(c[0] - a[0]) / 0.032, (c[1] - a[1]) / 0.032];
+        let vn = n[0] * (cd[0] - ad[0]) + n[1] * (cd[1] - ad[1]);
+        assert!(vn.abs() < 1e-12, "rolls on: normal speed {vn}");
+    }
 
     #[test]
     fn separation_fraction_is_the_linear_zero_and_zero_without_positive_start() {

@@ -148,10 +148,18 @@ fn locked_scene_free_vibration_frequency_equals_linearized_first_frequency() {
 /// linearized budget 1e-4 (the housing's residual motion, of order (f_ball/f_beam)² = 1e-4 times
 /// the tip/ball inertia ratio), simulated from θ(0) = 1° budget 1e-3 (amplitude correction
 /// θ₀²/16 = 2e-5, period error 6e-5, crossing-time interpolation).
+///
+/// The ball is held on its track (`ball.flight = false`): the trapezoidal rule (γ = ½, chosen
+/// for its period accuracy) does not damp the stiff beam's unresolved modes, whose end-node
+/// accelerations alternate from step to step and grow to ±8 m/s² after 1.8 s; the normal force
+/// computed from them then dips below zero at single steps and the ball would leave a track
+/// that really presses it with ≈ m_b g (docs/model.md, "Contact and flight": flight needs an
+/// integrator that damps unresolved modes).
 #[test]
 fn ball_in_a_fixed_housing_swings_at_the_rolling_pendulum_frequency() {
     let mut p = Params::<f64>::default();
     p.beam.modulus *= 1e4;
+    p.ball.flight = false;
     let closed = (p.gravity / (1.4 * p.ball.path_radius())).sqrt() / (2.0 * std::f64::consts::PI);
     assert!((p.ball.fixed_housing_frequency(p.gravity) / closed - 1.0).abs() < 1e-12);
     assert!(
