@@ -11,13 +11,13 @@ fn main() {
         (2.0 * u - 1.0) * 5.0 * 9.81
     };
     let mut fl = 0u64;
-    for k in 0..1_000_000u64 {
+    for k in 0..342_398u64 {
         let a = next();
         let before = *m.state();
         match m.step(a) {
             Ok(r) => {
                 fl += m.in_flight() as u64;
-                if false {
+                if k >= 342385 {
                     let s = m.state();
                     let (c, _) = m.ball_centre().unwrap();
                     let ax = m.params().beam.length + s.q[8];

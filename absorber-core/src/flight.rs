@@ -42,7 +42,8 @@
 //! impulse along `∇α_f` with the stops' restitution (plastic below `stick_speed`), the ball
 //! kept in flight; the crossing is detected when the ball is at the stops' height at both ends
 //! of a step, from either face. Nearer the centre the ball flies over the stops, onto the arc
-//! beyond them, where the model has no track to roll on: a landing there always bounces.
+//! beyond them, where it may land and roll like on the track (the stops then act on it from
+//! their other face, [`crate::stops`]).
 //!
 //! Impulses use the stops' metric ([`crate::ImpactModel`]): the step's Newmark matrix by default
 //! (an impulse in the mass-matrix metric kicks the housing's stiff end-rotation mode), the mass
@@ -192,7 +193,7 @@ pub fn polar_angle<T: Real>(d: [T; 2]) -> T {
 }
 
 /// `x` shifted by whole turns into `(−π, π]`.
-fn wrap<T: Real>(x: T) -> T {
+pub(crate) fn wrap<T: Real>(x: T) -> T {
     let two_pi = T::two_pi();
     let k = (x / two_pi).round();
     x - k * two_pi
@@ -591,18 +592,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let pressed = (-self.effective_gravity(s.base_accel) - accel_end[1]) * n[1]
             - accel_end[0] * n[0]
             + tangential * tangential / rho;
-        // Beyond the stops there is no track to roll on: a landing there always bounces.
-        let beyond = S::STOPS && {
-            let (alpha, _) = self.flight_relative_angle(s);
-            alpha.abs() > ball.stop_angle
-        };
-        let bounces = beyond
-            || landing_bounces(
-                ball.landing_restitution,
-                normal_speed,
-                rho * ball.stick_speed,
-                pressed * self.params.integrator.step,
-            );
+        let bounces = landing_bounces(
+            ball.landing_restitution,
+            normal_speed,
+            rho * ball.stick_speed,
+            pressed * self.params.integrator.step,
+        );
         if bounces {
             self.metric_factors(s, Contact::InFlight, ws)?;
             let mut y = SVector::<T, D>::zeros();
@@ -828,7 +823,10 @@ mod tests {
         let l = report.landing.expect("landed");
         assert!(l.bounced && (l.normal_speed - 0.3).abs() < 1e-12);
         let after = kinetic(&mut m, &s);
-        assert!((after - before).abs() < 1e-12 * before, "{before} → {after}");
+        assert!(
+            (after - before).abs() < 1e-12 * before,
+            "{before} → {after}"
+        );
         let rel = m.sys.relative(&s);
         let vn = (rel.d[0] * rel.rate[0] + rel.d[1] * rel.rate[1]) / rel.r;
         assert!((vn + 0.3).abs() < 1e-12, "{vn}");

@@ -466,7 +466,7 @@ mod tests {
                 let mut after = s;
                 let imp = m
                     .sys
-                    .impact(&mut after, Side::Positive, &mut m.work)
+                    .impact(&mut after, Side::Positive, true, &mut m.work)
                     .expect("impact");
                 m.state = after;
                 let t1 = m.energies(0.0, 0.0);

@@ -27,6 +27,11 @@ use crate::system::{Problem, System};
 use crate::tip::{self, Chain};
 use nalgebra::SVector;
 
+/// A rolling ball starting a step this far beyond a stop \[rad\] still counts as between the
+/// stops (it was put on the stop by an impact, to rounding); farther, it flew over the stop
+/// and rolls on the arc beyond it.
+const BEYOND_MARGIN: f64 = 1e-3;
+
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The stop events of a step from `start` whose trial end is `next`: an impact when the
     /// ball crossed a stop, a release when a held ball would be pulled.
@@ -43,10 +48,22 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         match next.contact {
             Contact::Off => {
-                if self.relative_angle(&next).abs() > self.params.ball.stop_angle {
-                    return self.impact_step(start, &next, base_accel, ws, report);
+                let stop = self.params.ball.stop_angle;
+                if !self.flies() {
+                    // The ball never leaves the span between the stops.
+                    if self.relative_angle(&next).abs() > stop {
+                        return self.impact_step(start, &next, true, base_accel, ws, report);
+                    }
+                    return Ok(next);
                 }
-                Ok(next)
+                // A ball that flew over a stop rolls on the arc beyond it: a crossing from
+                // either face is an impact.
+                let (a0, a1) = self.branch_angles(start, &next);
+                let inside = a0.abs() <= stop + lit(BEYOND_MARGIN);
+                if inside == (a1.abs() <= stop) {
+                    return Ok(next);
+                }
+                self.impact_step(start, &next, inside, base_accel, ws, report)
             }
             Contact::OnStop(side) => {
                 let mut next = next;
@@ -59,11 +76,21 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
     }
 
-    /// Splits a step that crossed a stop (module doc).
+    /// The relative angles of two states on one branch: `α₀` in `(−π, π]` and `α₁` the nearest
+    /// to it (a ball beyond the stops may roll past the top, where θ − ψ leaves `(−π, π]`).
+    pub(crate) fn branch_angles(&self, a: &State<T, D>, b: &State<T, D>) -> (T, T) {
+        let (raw0, raw1) = (self.relative_angle(a), self.relative_angle(b));
+        let a0 = crate::flight::wrap(raw0);
+        (a0, a0 + crate::flight::wrap(raw1 - raw0))
+    }
+
+    /// Splits a step that crossed a stop (module doc), from the span between the stops
+    /// (`inside`) or from the arc beyond them.
     fn impact_step(
         &self,
         start: &State<T, D>,
         trial: &State<T, D>,
+        inside: bool,
         base_accel: T,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
@@ -71,12 +98,31 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let kind = self.params.integrator.newton;
         let h = self.params.integrator.step;
         let stop = self.params.ball.stop_angle;
-        let side = if self.relative_angle(trial) > T::zero() {
-            Side::Positive
+        let tau;
+        let side;
+        if inside && !self.flies() {
+            side = if self.relative_angle(trial) > T::zero() {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            tau = self.crossing_fraction(start, trial, h, side.sign::<T>() * stop);
         } else {
-            Side::Negative
-        };
-        let tau = self.crossing_fraction(start, trial, h, side.sign::<T>() * stop);
+            let (a0, a1) = self.branch_angles(start, trial);
+            let outer = if inside { a1 } else { a0 };
+            side = if outer > T::zero() {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            let target = side.sign::<T>() * stop;
+            tau = crate::flight::hermite_root(
+                a0 - target,
+                self.relative_rate(start) * h,
+                a1 - target,
+                self.relative_rate(trial) * h,
+            );
+        }
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
         let mut mid = if h1 > h * lit(1e-6) {
@@ -88,7 +134,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             *start
         };
         mid.time = start.time + h1;
-        let impact = self.impact(&mut mid, side, ws)?;
+        let impact = self.impact(&mut mid, side, inside, ws)?;
         if !impact.stuck {
             let acc = self.consistent_acceleration(&mid, ws, kind)?;
             report.iterations += acc.iterations;
@@ -107,7 +153,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         };
         // A second crossing within the same (remaining) step: the ball came straight back
         // onto the stop; end the step with it resting there (plastic).
-        if end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
+        if inside && end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
             self.rest_on_stop(&mut end, ws, report)?;
         }
         report.impact = Some(impact);
@@ -136,6 +182,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         &self,
         s: &mut State<T, D>,
         side: Side,
+        inside: bool,
         ws: &mut Workspace<T, D>,
     ) -> Result<Impact<T>, Error> {
         let ball = &self.params.ball;
@@ -163,7 +210,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             stuck: false,
         };
         let plastic = speed.abs() < ball.stick_speed;
-        if side.sign::<T>() * speed > T::zero() {
+        // Towards the stop's face: outwards from between the stops, inwards from beyond.
+        let towards = if inside {
+            side.sign::<T>() * speed
+        } else {
+            -side.sign::<T>() * speed
+        };
+        if towards > T::zero() {
             let e = if plastic { T::zero() } else { ball.restitution };
             let mut y = grad;
             self.impulse_matrix(s, ws)?;
@@ -179,7 +232,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             impact.energy_loss = lit::<T>(0.5) * (T::one() - e * e) * speed * speed / w;
         }
         s.contact = Contact::Off;
-        if plastic {
+        if plastic && inside {
             // Stay on the stop if the contact force is compressive.
             let mut held = *s;
             held.contact = Contact::OnStop(side);

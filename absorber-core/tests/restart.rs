@@ -12,9 +12,10 @@ const BOUND: u32 = 3;
 const BUDGET: u32 = 6;
 
 /// Runs 10⁶ samples; returns (failed samples, restarts, most failures in a row after a restart).
-fn run(max_iterations: u32) -> (u32, u32, u32) {
+fn run(max_iterations: u32, flight: bool) -> (u32, u32, u32) {
     let mut p = Params::<f32>::default();
     p.integrator.max_iterations = max_iterations;
+    p.ball.flight = flight;
     let mut m = FreeBallModel::<f32, 3, 13>::at_rest(p, 0.0).expect("start");
     let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut next = || {
@@ -52,13 +53,24 @@ fn run(max_iterations: u32) -> (u32, u32, u32) {
 
 #[test]
 fn restart_recovers_from_every_failure_under_five_g_random_input() {
-    // The default budget runs the whole record (it used to reach a state nothing converged from).
-    let (failures, _, _) = run(100);
+    // The default budget runs the whole record with the ball held on its track (it used to reach
+    // a state nothing converged from).
+    let (failures, _, _) = run(100, false);
     assert_eq!(failures, 0, "{failures} of 10⁶ samples failed");
+    // With flight (the ball in the air 71 % of the time at ±5 g, 20 times the paper's peak
+    // input) a bounce every other step can pump the housing's stiff end-rotation mode until a
+    // step does not converge in f32: measured 2 of 10⁶ samples. Budget 10, and each is
+    // followed by a restart that steps again at once.
+    let (failures, _, worst_after) = run(100, true);
+    assert!(
+        failures <= 10,
+        "{failures} of 10⁶ samples failed with flight"
+    );
+    assert_eq!(worst_after, 0, "a failure right after a restart");
     // A budget of 6 iterations fails 0.7 % of the samples (measured 7,072): every failure is
     // followed by a restart, and the model steps again at once (measured: the next sample
     // succeeded every time; bound 3).
-    let (failures, restarts, worst_after) = run(BUDGET);
+    let (failures, restarts, worst_after) = run(BUDGET, false);
     assert!(
         restarts > 10,
         "the tight budget must exercise restart ({failures} failures)"
