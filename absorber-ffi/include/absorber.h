@@ -405,6 +405,15 @@ typedef struct AbsorberParams {
      * Calibration of the reduced beam (identity by default).
      */
     struct AbsorberCalibrationParams calibration;
+    /**
+     * 1 (default): the ball may leave the track where it would have to pull it, fly and
+     * land again; 0: the paper's bilateral track (`absorber_core::BallParams::flight`).
+     */
+    uint32_t flight;
+    /**
+     * Coefficient of normal restitution of a landing on the track \[-\] (default 0.5).
+     */
+    double landing_restitution;
 } AbsorberParams;
 
 /**
@@ -743,7 +752,8 @@ typedef struct AbsorberStateInfo_f32 {
      */
     uint32_t dofs;
     /**
-     * Stop contact: 0 off, +1, −1.
+     * Ball contact: 0 on the track off the stops, +1 / −1 resting on the positive / negative
+     * stop, 2 in flight.
      */
     int32_t contact;
     /**
@@ -758,6 +768,15 @@ typedef struct AbsorberStateInfo_f32 {
      * Base acceleration of the last step \[m/s²\].
      */
     float base_accel;
+    /**
+     * The ball's centre in the frame moving with the base (x along the beam from the clamp,
+     * y up) \[m\]; zero without a free ball.
+     */
+    float ball_centre[2];
+    /**
+     * Its velocity \[m/s\].
+     */
+    float ball_velocity[2];
 } AbsorberStateInfo_f32;
 
 /**
@@ -774,7 +793,8 @@ typedef struct AbsorberStateInfo_f64 {
      */
     uint32_t dofs;
     /**
-     * Stop contact: 0 off, +1, −1.
+     * Ball contact: 0 on the track off the stops, +1 / −1 resting on the positive / negative
+     * stop, 2 in flight.
      */
     int32_t contact;
     /**
@@ -789,6 +809,15 @@ typedef struct AbsorberStateInfo_f64 {
      * Base acceleration of the last step \[m/s²\].
      */
     double base_accel;
+    /**
+     * The ball's centre in the frame moving with the base (x along the beam from the clamp,
+     * y up) \[m\]; zero without a free ball.
+     */
+    double ball_centre[2];
+    /**
+     * Its velocity \[m/s\].
+     */
+    double ball_velocity[2];
 } AbsorberStateInfo_f64;
 
 /**

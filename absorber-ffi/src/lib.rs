@@ -358,6 +358,11 @@ pub struct AbsorberParams {
     pub alpha_f: f64,
     /// Calibration of the reduced beam (identity by default).
     pub calibration: AbsorberCalibrationParams,
+    /// 1 (default): the ball may leave the track where it would have to pull it, fly and
+    /// land again; 0: the paper's bilateral track (`absorber_core::BallParams::flight`).
+    pub flight: u32,
+    /// Coefficient of normal restitution of a landing on the track \[-\] (default 0.5).
+    pub landing_restitution: f64,
 }
 
 /// Opaque model: a pointer into the caller's storage, made by [`absorber_init`].
@@ -470,7 +475,8 @@ pub type AbsorberEnergiesF64 = AbsorberEnergies<f64>;
 pub struct AbsorberStateInfo<T> {
     /// Number of unknowns D (length of q, v, a).
     pub dofs: u32,
-    /// Stop contact: 0 off, +1, −1.
+    /// Ball contact: 0 on the track off the stops, +1 / −1 resting on the positive / negative
+    /// stop, 2 in flight.
     pub contact: i32,
     /// Whole steps since the start.
     pub steps: u64,
@@ -478,6 +484,11 @@ pub struct AbsorberStateInfo<T> {
     pub time: T,
     /// Base acceleration of the last step \[m/s²\].
     pub base_accel: T,
+    /// The ball's centre in the frame moving with the base (x along the beam from the clamp,
+    /// y up) \[m\]; zero without a free ball.
+    pub ball_centre: [T; 2],
+    /// Its velocity \[m/s\].
+    pub ball_velocity: [T; 2],
 }
 
 /// State scalars of a `float` model.
@@ -675,18 +686,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Erased<T> for Model<T, S
 
     fn state(&self) -> (&[T], &[T], &[T], AbsorberStateInfo<T>) {
         let s = Model::state(self);
-        (
-            s.q.as_slice(),
-            s.v.as_slice(),
-            s.a.as_slice(),
+        (s.q.as_slice(), s.v.as_slice(), s.a.as_slice(), {
+            let (ball_centre, ball_velocity) = self
+                .ball_centre()
+                .unwrap_or(([T::zero(); 2], [T::zero(); 2]));
             AbsorberStateInfo {
                 dofs: D as u32,
                 contact: contact_code(s.contact),
                 steps: s.steps,
                 time: s.time,
                 base_accel: s.base_accel,
-            },
-        )
+                ball_centre,
+                ball_velocity,
+            }
+        })
     }
 
     fn root_stress(&self) -> Result<T, Error> {
@@ -963,6 +976,12 @@ fn to_params<T: Real>(p: &AbsorberParams) -> Result<Params<T>, Error> {
     q.calibration.bending_stiffness = lit(p.calibration.bending_stiffness);
     q.calibration.axial_stiffness = lit(p.calibration.axial_stiffness);
     q.calibration.mass_lumping = lit(p.calibration.mass_lumping);
+    q.ball.flight = match p.flight {
+        0 => false,
+        1 => true,
+        _ => return Err(invalid("flight", "must be 0 or 1")),
+    };
+    q.ball.landing_restitution = lit(p.landing_restitution);
     Ok(q)
 }
 
@@ -1080,6 +1099,8 @@ pub unsafe extern "C" fn absorber_params_default(params: *mut AbsorberParams) ->
             axial_stiffness: d.calibration.axial_stiffness,
             mass_lumping: d.calibration.mass_lumping,
         },
+        flight: u32::from(d.ball.flight),
+        landing_restitution: d.ball.landing_restitution,
     };
     // SAFETY: non-null, valid for writes by the caller's guarantee.
     unsafe { params.write(p) };

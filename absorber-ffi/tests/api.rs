@@ -119,11 +119,19 @@ fn fingerprint(model: *mut AbsorberModel, monitor: Option<*mut AbsorberMonitor>)
         }
         hash.word(info.time.to_bits());
         hash.word(info.base_accel.to_bits());
+        // The firmware's contact words: 0 on the track, 1 / 2 on the positive / negative stop,
+        // 3 in flight followed by the ball's centre and velocity.
         hash.word(match info.contact {
             0 => 0,
             1 => 1,
+            2 => 3,
             _ => 2,
         });
+        if info.contact == 2 {
+            for x in info.ball_centre.iter().chain(info.ball_velocity.iter()) {
+                hash.word(x.to_bits());
+            }
+        }
         let second = (k * STEP_MS) / 1000 != ((k - 1) * STEP_MS) / 1000;
         if let Some(mon) = monitor {
             let mut m = AbsorberMonitorReadingF32::default();

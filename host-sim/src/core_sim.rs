@@ -79,6 +79,10 @@ impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator
         }
     }
 
+    fn in_flight(&self) -> bool {
+        self.model.in_flight()
+    }
+
     fn contact_forces(&self) -> Option<(f64, f64)> {
         self.model
             .contact_forces()

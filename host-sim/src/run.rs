@@ -91,6 +91,12 @@ pub struct Row {
     /// Tangential force of the track on the ball \[N\] (rolling friction; plus the stop's
     /// reaction while the ball rests on a stop; NaN without a free ball).
     pub tangential_force: f64,
+    /// 1: the ball is on the track, 0: in flight (NaN without a free ball).
+    pub contact: f64,
+    /// The ball left the track during the step (not a CSV column).
+    pub separated: bool,
+    /// A landing during the step: `(bounced, required friction |P_t|/P_n)` (not a CSV column).
+    pub landing: Option<(bool, f64)>,
 }
 
 /// The CSV header (also documents the columns).
@@ -105,8 +111,9 @@ pub const CSV_HEADER: &str = "\
 # base_accel [m/s^2]; tip_velocity [m/s]; tip_rate, ball_rate, ball_rel_rate [rad/s];
 # ball_spin: phi = psi - (rho/r_b)(theta - psi) [rad]; ball_spin_rate [rad/s];
 # normal_force: track on ball, towards the track centre [N] (< 0: the track pulls: a real ball would leave it);
-# tangential_force: track on ball along increasing theta [N] (friction rolling needs; plus a stop's reaction)
-t,base_y,tip_y,tip_deflection,tip_angle,ball_angle,ball_rel_angle,beam_strain,beam_kinetic,beam_potential,tip_kinetic,tip_potential,ball_kinetic,ball_potential,iterations,impact,base_accel,tip_velocity,tip_rate,ball_rate,ball_rel_rate,ball_spin,ball_spin_rate,normal_force,tangential_force";
+# tangential_force: track on ball along increasing theta [N] (friction rolling needs; plus a stop's reaction);
+# contact: 1 the ball is on the track, 0 it flies inside the housing (then ball_angle is the polar angle of its centre)
+t,base_y,tip_y,tip_deflection,tip_angle,ball_angle,ball_rel_angle,beam_strain,beam_kinetic,beam_potential,tip_kinetic,tip_potential,ball_kinetic,ball_potential,iterations,impact,base_accel,tip_velocity,tip_rate,ball_rate,ball_rel_rate,ball_spin,ball_spin_rate,normal_force,tangential_force,contact";
 
 /// Names of the CSV columns, in order (the last line of [`CSV_HEADER`]).
 pub fn csv_columns() -> Vec<&'static str> {
@@ -120,7 +127,7 @@ pub fn csv_columns() -> Vec<&'static str> {
 
 impl Row {
     /// The row's values in the order of [`csv_columns`] (`iterations` and `impact` as numbers).
-    pub fn values(&self) -> [f64; 25] {
+    pub fn values(&self) -> [f64; 26] {
         let e = &self.energies;
         [
             self.t,
@@ -148,13 +155,14 @@ impl Row {
             self.ball_spin_rate,
             self.normal_force,
             self.tangential_force,
+            self.contact,
         ]
     }
 
     /// The row as a CSV line (no newline): [`Row::values`], `iterations` and `impact` as
     /// integers, everything else with 10 significant digits.
     pub fn csv(&self) -> String {
-        let mut s = String::with_capacity(25 * 17);
+        let mut s = String::with_capacity(26 * 17);
         for (i, x) in self.values().iter().enumerate() {
             if i > 0 {
                 s.push(',');
@@ -162,6 +170,7 @@ impl Row {
             match i {
                 14 => s.push_str(&self.iterations.to_string()),
                 15 => s.push_str(if self.impact { "1" } else { "0" }),
+                25 if x.is_finite() => s.push_str(if *x > 0.5 { "1" } else { "0" }),
                 _ => s.push_str(&format!("{x:.9e}")),
             }
         }
@@ -203,7 +212,7 @@ pub fn simulate_with(
     let spin_ratio = params.ball.path_radius() / params.ball.radius;
     let b0 = exc.at(0);
     let mut sim = build_simulator(scene, b0.accel)?;
-    let row = |sim: &dyn Simulator, k: usize, iterations: u32, impact: bool| {
+    let row = |sim: &dyn Simulator, k: usize, report: Option<&absorber_core::StepReport<f64>>| {
         let o = sim.observe();
         let contact = sim.contact_forces();
         let b = exc.at(k);
@@ -216,8 +225,8 @@ pub fn simulate_with(
             ball_angle: o.ball_angle,
             ball_rel_angle: o.ball_relative_angle,
             energies: sim.energies(b.velocity, b.displacement),
-            iterations,
-            impact,
+            iterations: report.map_or(0, |r| r.iterations),
+            impact: report.is_some_and(|r| r.impact.is_some()),
             base_accel: b.accel,
             tip_velocity: o.tip_velocity,
             tip_rate: o.tip_rate,
@@ -227,9 +236,14 @@ pub fn simulate_with(
             ball_spin_rate: o.tip_rate - spin_ratio * o.ball_relative_rate,
             normal_force: contact.map_or(f64::NAN, |c| c.0),
             tangential_force: contact.map_or(f64::NAN, |c| c.1),
+            contact: contact.map_or(f64::NAN, |_| if sim.in_flight() { 0.0 } else { 1.0 }),
+            separated: report.is_some_and(|r| r.separation.is_some()),
+            landing: report
+                .and_then(|r| r.landing)
+                .map(|l| (l.bounced, l.required_friction().unwrap_or(f64::NAN))),
         }
     };
-    sink(&row(sim.as_ref(), 0, 0, false))?;
+    sink(&row(sim.as_ref(), 0, None))?;
     for k in 1..=steps {
         let b = exc.at(k);
         let report = sim.step(b.accel).map_err(|e| {
@@ -240,12 +254,7 @@ pub fn simulate_with(
                 scene_error(e, scene)
             )
         })?;
-        sink(&row(
-            sim.as_ref(),
-            k,
-            report.iterations,
-            report.impact.is_some(),
-        ))?;
+        sink(&row(sim.as_ref(), k, Some(&report)))?;
         if k % 500 == 0 {
             progress(k);
         }
@@ -313,6 +322,15 @@ struct ContactStats {
     steady_pulled: u64,
     min_normal: f64,
     max_mu: f64,
+    /// Samples in flight, whole run and steady part.
+    flying: u64,
+    steady_flying: u64,
+    separations: u64,
+    landings: u64,
+    bounces: u64,
+    /// Plastic landings whose rough impulse needed more friction than the coefficient.
+    slipping_landings: u64,
+    max_landing_mu: f64,
 }
 
 impl RunStats {
@@ -376,6 +394,20 @@ impl RunStats {
         self.max_iterations = self.max_iterations.max(r.iterations);
         if let (Some((_, stop, mu)), true) = (self.contact.ball, r.normal_force.is_finite()) {
             let c = &mut self.contact;
+            let flying = u64::from(r.contact == 0.0);
+            c.flying += flying;
+            c.separations += u64::from(r.separated);
+            if let Some((bounced, need)) = r.landing {
+                c.landings += 1;
+                c.bounces += u64::from(bounced);
+                if !bounced && need.is_finite() {
+                    c.slipping_landings += u64::from(need > mu);
+                    c.max_landing_mu = c.max_landing_mu.max(need);
+                }
+            }
+            if r.t >= self.steady_from - eps {
+                c.steady_flying += flying;
+            }
             let pulled = u64::from(r.normal_force < 0.0);
             // On a stop the tangential force is the stop's, not friction's.
             let on_stop = r.ball_rel_angle.abs() >= stop * (1.0 - 1e-9);
@@ -450,6 +482,13 @@ impl ContactStats {
             "friction": mu,
             "slip_fraction": frac(self.slips, self.samples),
             "slip_fraction_steady": frac(self.steady_slips, self.steady_samples),
+            "flight_fraction": frac(self.flying, self.samples),
+            "flight_fraction_steady": frac(self.steady_flying, self.steady_samples),
+            "separations": self.separations,
+            "landings": self.landings,
+            "bounces": self.bounces,
+            "landings_slipping": self.slipping_landings,
+            "landing_friction_max": self.max_landing_mu,
         })
     }
 }

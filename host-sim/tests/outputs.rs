@@ -555,6 +555,9 @@ fn plot_buffers_stay_bounded_on_long_runs() {
         ball_spin_rate: 0.0,
         normal_force: f64::NAN,
         tangential_force: f64::NAN,
+        contact: f64::NAN,
+        separated: false,
+        landing: None,
     };
     let n = 3_000_000usize;
     for k in 0..=n {

@@ -98,13 +98,34 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
         ),
     ];
     if let Some(c) = s.get("contact").filter(|c| c.is_object()) {
-        lines.push(format!(
+        let count = |k: &str| c.get(k).and_then(|x| x.as_u64()).unwrap_or(0);
+        if count("separations") > 0 {
+            lines.push(format!(
+                "ball in flight             {:.1} % of the time ({:.1} % for t ≥ {} s): {} separations, {} landings ({} bounces)",
+                100.0 * num(c, "flight_fraction"),
+                100.0 * num(c, "flight_fraction_steady"),
+                num(s, "steady_from"),
+                count("separations"),
+                count("landings"),
+                count("bounces"),
+            ));
+            lines.push(format!(
+                "landing on the track       {} of {} rolling landings need more friction than μ = {} (peak |P_t|/P_n {:.2})",
+                count("landings_slipping"),
+                count("landings") - count("bounces"),
+                num(c, "friction"),
+                num(c, "landing_friction_max"),
+            ));
+        }
+        if count("separations") == 0 {
+            lines.push(format!(
             "track contact              N < 0 (the track pulls: a real ball would leave it) {:.1} % of the time ({:.1} % for t ≥ {} s), min N = {:.2} m_b g",
             100.0 * num(c, "track_pulls_fraction"),
             100.0 * num(c, "track_pulls_fraction_steady"),
             num(s, "steady_from"),
             num(c, "normal_force_min_over_weight"),
         ));
+        }
         lines.push(format!(
             "rolling without slip       needs more friction than μ = {} {:.1} % of the time ({:.1} % for t ≥ {} s; peak |F_t|/N {:.3e})",
             num(c, "friction"),
