@@ -312,25 +312,39 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let ch = self.newmark_chain(h);
         let x = [T::zero(), -g_end];
         let mut next = *f;
-        for k in 0..2 {
-            let pseudo = if self.alpha.is_some() {
-                f.pseudo_accel[k]
-            } else {
-                f.accel[k]
-            };
-            let mut q = f.centre[k] + h * f.velocity[k] + h * h * (half - i.beta) * pseudo;
-            let mut v = f.velocity[k] + h * (T::one() - i.gamma) * pseudo;
-            let mut pa = x[k];
+        let known = |k: usize| match (&self.alpha, f.accel.get(k), f.pseudo_accel.get(k)) {
+            (Some(g), Some(a), Some(pa)) => g.from_accel * *a + g.from_pseudo * *pa,
+            _ => T::zero(),
+        };
+        let lanes = next
+            .centre
+            .iter_mut()
+            .zip(next.velocity.iter_mut())
+            .zip(next.accel.iter_mut().zip(next.pseudo_accel.iter_mut()));
+        for (k, (((q1, v1), (a1, pa1)), ((q0, v0), (a0, pa0)))) in lanes
+            .zip(
+                f.centre
+                    .iter()
+                    .zip(f.velocity.iter())
+                    .zip(f.accel.iter().zip(f.pseudo_accel.iter())),
+            )
+            .enumerate()
+        {
+            let xk = x.get(k).copied().unwrap_or(T::zero());
+            let pseudo = if self.alpha.is_some() { *pa0 } else { *a0 };
+            let mut q = *q0 + h * *v0 + h * h * (half - i.beta) * pseudo;
+            let mut v = *v0 + h * (T::one() - i.gamma) * pseudo;
+            let mut pa = xk;
             if let Some(g) = &self.alpha {
-                let known = g.from_accel * f.accel[k] + g.from_pseudo * f.pseudo_accel[k];
-                q += i.beta * h * h * known;
-                v += i.gamma * h * known;
-                pa = known + g.ratio * x[k];
+                let b = known(k);
+                q += i.beta * h * h * b;
+                v += i.gamma * h * b;
+                pa = b + g.ratio * xk;
             }
-            next.centre[k] = q + ch.c_q * x[k];
-            next.velocity[k] = v + ch.c_v * x[k];
-            next.accel[k] = x[k];
-            next.pseudo_accel[k] = pa;
+            *q1 = q + ch.c_q * xk;
+            *v1 = v + ch.c_v * xk;
+            *a1 = xk;
+            *pa1 = pa;
         }
         next
     }
@@ -374,7 +388,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         report: &mut StepReport<T>,
     ) -> Result<State<T, D>, Error> {
         let n_end = self.normal_force(&next);
-        if !(n_end < T::zero()) {
+        if n_end >= T::zero() || !n_end.is_finite() {
             return Ok(next);
         }
         let kind = self.params.integrator.newton;

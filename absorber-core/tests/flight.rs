@@ -89,8 +89,10 @@ fn energy<S: absorber_core::Scene, const N: usize, const D: usize>(m: &Model<f64
 /// grow with the number of bounces instead).
 #[test]
 fn elastic_flight_and_bounces_conserve_energy() {
-    let mut p = Params::<f64>::default();
-    p.gravity = -0.5 * 9.81;
+    let mut p = Params::<f64> {
+        gravity: -0.5 * 9.81,
+        ..Default::default()
+    };
     p.integrator.gamma = 0.5;
     p.integrator.beta = 0.25;
     p.integrator.step = 1e-4;

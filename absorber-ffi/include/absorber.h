@@ -475,6 +475,35 @@ typedef struct AbsorberReport_f32 {
      * Kinetic energy dissipated \[J\].
      */
     float impact_energy_loss;
+    /**
+     * 1 if the ball left the track in this step (at `separation_time`), else 0.
+     */
+    uint8_t separation;
+    /**
+     * 0 without a landing in this step, 1 a landing after which the ball flew on (a bounce),
+     * 2 a landing after which it rolls (the `landing_*` fields are then set).
+     */
+    uint8_t landing;
+    /**
+     * Time the ball left the track \[s\].
+     */
+    float separation_time;
+    /**
+     * Time of the landing \[s\].
+     */
+    float landing_time;
+    /**
+     * Normal speed towards the track before the landing \[m/s\].
+     */
+    float landing_normal_speed;
+    /**
+     * Normal impulse of the track on the ball \[N·s\].
+     */
+    float landing_normal_impulse;
+    /**
+     * Tangential impulse of the track on the ball \[N·s\].
+     */
+    float landing_tangential_impulse;
 } AbsorberReport_f32;
 
 /**
@@ -522,6 +551,35 @@ typedef struct AbsorberReport_f64 {
      * Kinetic energy dissipated \[J\].
      */
     double impact_energy_loss;
+    /**
+     * 1 if the ball left the track in this step (at `separation_time`), else 0.
+     */
+    uint8_t separation;
+    /**
+     * 0 without a landing in this step, 1 a landing after which the ball flew on (a bounce),
+     * 2 a landing after which it rolls (the `landing_*` fields are then set).
+     */
+    uint8_t landing;
+    /**
+     * Time the ball left the track \[s\].
+     */
+    double separation_time;
+    /**
+     * Time of the landing \[s\].
+     */
+    double landing_time;
+    /**
+     * Normal speed towards the track before the landing \[m/s\].
+     */
+    double landing_normal_speed;
+    /**
+     * Normal impulse of the track on the ball \[N·s\].
+     */
+    double landing_normal_impulse;
+    /**
+     * Tangential impulse of the track on the ball \[N·s\].
+     */
+    double landing_tangential_impulse;
 } AbsorberReport_f64;
 
 /**
@@ -968,6 +1026,26 @@ typedef struct AbsorberMonitorReading_f32 {
      * Impacts after which the ball stayed on the stop.
      */
     uint32_t impacts_stuck;
+    /**
+     * Fraction of the samples with the ball in flight \[-\].
+     */
+    float flight_fraction;
+    /**
+     * Largest friction coefficient rolling needed on the track, `|F_t|/N` \[-\].
+     */
+    float peak_rolling_friction;
+    /**
+     * Largest friction coefficient a rolling landing needed, `|P_t|/P_n` \[-\].
+     */
+    float peak_landing_friction;
+    /**
+     * Times the ball left the track.
+     */
+    uint32_t separations;
+    /**
+     * Landings on the track (bounces included).
+     */
+    uint32_t landings;
 } AbsorberMonitorReading_f32;
 
 /**
@@ -1087,6 +1165,26 @@ typedef struct AbsorberMonitorReading_f64 {
      * Impacts after which the ball stayed on the stop.
      */
     uint32_t impacts_stuck;
+    /**
+     * Fraction of the samples with the ball in flight \[-\].
+     */
+    double flight_fraction;
+    /**
+     * Largest friction coefficient rolling needed on the track, `|F_t|/N` \[-\].
+     */
+    double peak_rolling_friction;
+    /**
+     * Largest friction coefficient a rolling landing needed, `|P_t|/P_n` \[-\].
+     */
+    double peak_landing_friction;
+    /**
+     * Times the ball left the track.
+     */
+    uint32_t separations;
+    /**
+     * Landings on the track (bounces included).
+     */
+    uint32_t landings;
 } AbsorberMonitorReading_f64;
 
 /**

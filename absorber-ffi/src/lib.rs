@@ -397,6 +397,21 @@ pub struct AbsorberReport<T> {
     pub impact_impulse: T,
     /// Kinetic energy dissipated \[J\].
     pub impact_energy_loss: T,
+    /// 1 if the ball left the track in this step (at `separation_time`), else 0.
+    pub separation: u8,
+    /// 0 without a landing in this step, 1 a landing after which the ball flew on (a bounce),
+    /// 2 a landing after which it rolls (the `landing_*` fields are then set).
+    pub landing: u8,
+    /// Time the ball left the track \[s\].
+    pub separation_time: T,
+    /// Time of the landing \[s\].
+    pub landing_time: T,
+    /// Normal speed towards the track before the landing \[m/s\].
+    pub landing_normal_speed: T,
+    /// Normal impulse of the track on the ball \[N·s\].
+    pub landing_normal_impulse: T,
+    /// Tangential impulse of the track on the ball \[N·s\].
+    pub landing_tangential_impulse: T,
 }
 
 /// Step report of a `float` model.
@@ -573,6 +588,16 @@ pub struct AbsorberMonitorReading<T> {
     pub impacts: u32,
     /// Impacts after which the ball stayed on the stop.
     pub impacts_stuck: u32,
+    /// Fraction of the samples with the ball in flight \[-\].
+    pub flight_fraction: T,
+    /// Largest friction coefficient rolling needed on the track, `|F_t|/N` \[-\].
+    pub peak_rolling_friction: T,
+    /// Largest friction coefficient a rolling landing needed, `|P_t|/P_n` \[-\].
+    pub peak_landing_friction: T,
+    /// Times the ball left the track.
+    pub separations: u32,
+    /// Landings on the track (bounces included).
+    pub landings: u32,
 }
 
 /// Monitor reading of a `float` monitor.
@@ -1275,6 +1300,7 @@ fn report_of<T: Real>(r: &StepReport<T>) -> AbsorberReport<T> {
             impact_relative_speed: z,
             impact_impulse: z,
             impact_energy_loss: z,
+            ..flight_fields(r)
         },
         Some(i) => AbsorberReport {
             iterations: r.iterations,
@@ -1289,7 +1315,32 @@ fn report_of<T: Real>(r: &StepReport<T>) -> AbsorberReport<T> {
             impact_relative_speed: i.relative_speed,
             impact_impulse: i.impulse,
             impact_energy_loss: i.energy_loss,
+            ..flight_fields(r)
         },
+    }
+}
+
+/// A report with only the flight fields of `r` set.
+fn flight_fields<T: Real>(r: &StepReport<T>) -> AbsorberReport<T> {
+    let z = T::zero();
+    let l = r.landing;
+    AbsorberReport {
+        iterations: 0,
+        increment: z,
+        impact: 0,
+        impact_stuck: 0,
+        impact_side: 0,
+        impact_time: z,
+        impact_relative_speed: z,
+        impact_impulse: z,
+        impact_energy_loss: z,
+        separation: u8::from(r.separation.is_some()),
+        landing: l.map_or(0, |l| if l.bounced { 1 } else { 2 }),
+        separation_time: r.separation.unwrap_or(z),
+        landing_time: l.map_or(z, |l| l.time),
+        landing_normal_speed: l.map_or(z, |l| l.normal_speed),
+        landing_normal_impulse: l.map_or(z, |l| l.normal_impulse),
+        landing_tangential_impulse: l.map_or(z, |l| l.tangential_impulse),
     }
 }
 
@@ -1785,8 +1836,14 @@ unsafe fn monitor_record<T: Scalar>(
             energy_loss: r.impact_energy_loss,
             stuck: r.impact_stuck != 0,
         }),
-        separation: None,
-        landing: None,
+        separation: (r.separation != 0).then_some(r.separation_time),
+        landing: (r.landing != 0).then_some(absorber_core::Landing {
+            time: r.landing_time,
+            normal_speed: r.landing_normal_speed,
+            normal_impulse: r.landing_normal_impulse,
+            tangential_impulse: r.landing_tangential_impulse,
+            bounced: r.landing == 1,
+        }),
     };
     match m.record(mon, &rep, base_accel) {
         Ok(s) => {
@@ -1868,6 +1925,11 @@ fn reading<T: Real>(m: &Monitor<T>) -> AbsorberMonitorReading<T> {
         rejected: m.rejected(),
         impacts: imp.total(),
         impacts_stuck: imp.stuck(),
+        flight_fraction: m.flight_fraction(),
+        peak_rolling_friction: m.flight().peak_rolling_friction,
+        peak_landing_friction: m.flight().peak_landing_friction,
+        separations: m.flight().separations,
+        landings: m.flight().landings,
     }
 }
 

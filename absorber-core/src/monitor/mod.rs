@@ -156,6 +156,26 @@ pub struct Monitor<
     samples: u64,
     rejected: u32,
     twin_failures: u32,
+    flight: FlightLog<T>,
+}
+
+/// What the ball's contact did (free-ball scenes; `crate::flight`): samples in flight,
+/// separations, landings and bounces, and the largest friction coefficient rolling needed, on
+/// the track (`|F_t|/N`, off the stops) and in a rolling landing (`|P_t|/P_n`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FlightLog<T> {
+    /// Samples recorded with the ball in flight.
+    pub samples_in_flight: u64,
+    /// Times the ball left the track.
+    pub separations: u32,
+    /// Landings (bounces included).
+    pub landings: u32,
+    /// Landings after which the ball flew on.
+    pub bounces: u32,
+    /// Largest `|F_t|/N` of a rolling ball off the stops \[-\].
+    pub peak_rolling_friction: T,
+    /// Largest `|P_t|/P_n` of a landing after which the ball rolls \[-\].
+    pub peak_landing_friction: T,
 }
 
 impl<T: Real, const CAP: usize, const K: usize, const W: usize> Monitor<T, NoTwin, CAP, K, W> {
@@ -210,6 +230,14 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
             samples: 1,
             rejected: 0,
             twin_failures: 0,
+            flight: FlightLog {
+                samples_in_flight: u64::from(model.in_flight()),
+                separations: 0,
+                landings: 0,
+                bounces: 0,
+                peak_rolling_friction: T::zero(),
+                peak_landing_friction: T::zero(),
+            },
         })
     }
 
@@ -239,6 +267,7 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
         if let Some(impact) = &report.impact {
             self.impacts.record(impact);
         }
+        self.record_contact(model, report);
         if self.twin.advance(base_accel).is_err() {
             self.twin_failures = self.twin_failures.saturating_add(1);
         }
@@ -253,6 +282,45 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
             twin: self.twin.tip(),
         });
         Ok(stress)
+    }
+
+    /// The ball's contact in this sample ([`FlightLog`]).
+    fn record_contact<S: Scene, const N: usize, const D: usize>(
+        &mut self,
+        model: &Model<T, S, N, D>,
+        report: &StepReport<T>,
+    ) {
+        let f = &mut self.flight;
+        f.separations = f
+            .separations
+            .saturating_add(u32::from(report.separation.is_some()));
+        if let Some(l) = &report.landing {
+            f.landings = f.landings.saturating_add(1);
+            f.bounces = f.bounces.saturating_add(u32::from(l.bounced));
+            if let (false, Some(mu)) = (l.bounced, l.required_friction()) {
+                f.peak_landing_friction = f.peak_landing_friction.max(mu);
+            }
+        }
+        if model.in_flight() {
+            f.samples_in_flight = f.samples_in_flight.saturating_add(1);
+        } else if model.state().contact == crate::Contact::Off {
+            if let Some(mu) = model.contact_forces().and_then(|c| c.required_friction()) {
+                f.peak_rolling_friction = f.peak_rolling_friction.max(mu);
+            }
+        }
+    }
+
+    /// The ball's contact so far ([`FlightLog`]).
+    pub fn flight(&self) -> &FlightLog<T> {
+        &self.flight
+    }
+
+    /// Fraction of the recorded samples with the ball in flight \[-\].
+    pub fn flight_fraction(&self) -> T {
+        if self.samples == 0 {
+            return T::zero();
+        }
+        T::from_count(self.flight.samples_in_flight) / T::from_count(self.samples)
     }
 
     /// Root stress of the last sample (top fibre, tension positive) \[Pa\].
