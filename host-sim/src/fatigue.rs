@@ -30,6 +30,8 @@ pub struct RunFatigue {
     pub tip_rms: f64,
     /// Stop impacts.
     pub impacts: u32,
+    /// Fraction of the samples with the ball in flight \[-\].
+    pub flight_fraction: f64,
     /// Residue overflows (0 = exact counting).
     pub overflows: u64,
     /// Simulated time [s].
@@ -61,6 +63,7 @@ impl RunFatigue {
             static_stress: f64::NAN,
             tip_rms: f64::NAN,
             impacts: 0,
+            flight_fraction: f64::NAN,
             overflows: 0,
             time: 0.0,
             error: Some(e),
@@ -112,6 +115,7 @@ fn run_one<S: CoreScene, const N: usize, const D: usize>(
         static_stress: mon.static_root_stress(),
         tip_rms: mon.indicators().tip_rms,
         impacts: mon.impacts().total(),
+        flight_fraction: mon.flight_fraction(),
         overflows: mon.rainflow().overflows(),
         time: mon.elapsed(),
         error,
@@ -206,7 +210,7 @@ pub fn csv(points: &[FatiguePoint], category: &str, moment: &str) -> String {
         "# host-sim fatigue: root-stress damage rate, AASHTO category {category} (m = 3, CAFT cutoff), moment estimate {moment}\n\
          # damage_rate [1/h] = Miner damage of the run (residue as half cycles) per hour; s_eq, max_range, static_stress [MPa]; tip_rms [mm] over the last window\n\
          # status: ok, or failed (then no numbers; error says why)\n\
-         frequency,amplitude,status,free_damage_rate,locked_damage_rate,free_s_eq,locked_s_eq,free_max_range,locked_max_range,static_stress,free_tip_rms,locked_tip_rms,free_impacts,free_overflows,locked_overflows,error\n"
+         frequency,amplitude,status,free_damage_rate,locked_damage_rate,free_s_eq,locked_s_eq,free_max_range,locked_max_range,static_stress,free_tip_rms,locked_tip_rms,free_impacts,free_flight_fraction,free_overflows,locked_overflows,error\n"
     );
     for p in points {
         let err = [&p.free.error, &p.locked.error]
@@ -218,13 +222,13 @@ pub fn csv(points: &[FatiguePoint], category: &str, moment: &str) -> String {
         if p.failed() {
             // No numbers for a failed point: what a failed run computed is not its result.
             s.push_str(&format!(
-                "{},{},failed,,,,,,,,,,,,,{err}\n",
+                "{},{},failed,,,,,,,,,,,,,,{err}\n",
                 p.frequency, p.amplitude
             ));
             continue;
         }
         s.push_str(&format!(
-            "{},{},ok,{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},\n",
+            "{},{},ok,{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.4},{},{},\n",
             p.frequency,
             p.amplitude,
             p.free.damage_rate,
@@ -237,6 +241,7 @@ pub fn csv(points: &[FatiguePoint], category: &str, moment: &str) -> String {
             p.free.tip_rms * 1e3,
             p.locked.tip_rms * 1e3,
             p.free.impacts,
+            p.free.flight_fraction,
             p.free.overflows,
             p.locked.overflows,
         ));

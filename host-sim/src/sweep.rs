@@ -28,6 +28,8 @@ pub struct SweepPoint {
     pub ball_amplitude_deg: f64,
     /// Stop impacts over the whole run.
     pub impacts: u32,
+    /// Fraction of the window with the ball in flight \[-\] (0 without a free ball).
+    pub flight_fraction: f64,
     /// Largest Newton iteration count of a step.
     pub max_iterations: u32,
     /// Why the run failed (then the figures above cover only what was computed and are not
@@ -64,6 +66,7 @@ pub fn sweep(
             let (mut lo, mut hi, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
             let (mut blo, mut bhi, mut bmax) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
             let (mut impacts, mut max_it) = (0u32, 0u32);
+            let mut flying = 0usize;
             let mut last_k = 0usize;
             let result = simulate(
                 scene,
@@ -77,6 +80,7 @@ pub fn sweep(
                         hi = hi.max(r.tip_deflection);
                         sum += r.tip_deflection;
                         n += 1;
+                        flying += usize::from(r.contact == 0.0);
                         if r.ball_angle.is_finite() {
                             let d = r.ball_angle.to_degrees();
                             blo = blo.min(d);
@@ -98,6 +102,11 @@ pub fn sweep(
                 ball_max_deg: if blo <= bhi { bmax } else { f64::NAN },
                 ball_amplitude_deg: half(blo, bhi),
                 impacts,
+                flight_fraction: if n > 0 {
+                    flying as f64 / n as f64
+                } else {
+                    f64::NAN
+                },
                 max_iterations: max_it,
                 error: result.err().map(|e| format!("{e:#}")),
             }
@@ -117,26 +126,28 @@ pub fn csv(points: &[SweepPoint]) -> String {
     let mut s = String::from(
         "# host-sim sweep: steady-state amplitudes over the last part of each run\n\
          # frequency [Hz]; status: ok, or failed (then no numbers; error says why); tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
-         # ball_max_deg: max |theta| [deg]; ball_amplitude_deg: half peak-to-peak theta [deg]; impacts; max_iterations; error\n\
-         frequency,status,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,max_iterations,error\n",
+         # ball_max_deg: max |theta| [deg]; ball_amplitude_deg: half peak-to-peak theta [deg]; impacts;\n\
+         # flight_fraction: share of the window with the ball in flight [-]; max_iterations; error\n\
+         frequency,status,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,flight_fraction,max_iterations,error\n",
     );
     for p in points {
         if let Some(e) = &p.error {
             s.push_str(&format!(
-                "{},failed,,,,,,,{}\n",
+                "{},failed,,,,,,,,{}\n",
                 p.frequency,
                 e.replace([',', '\n'], ";")
             ));
             continue;
         }
         s.push_str(&format!(
-            "{},ok,{:.6e},{:.6e},{:.4},{:.4},{},{},\n",
+            "{},ok,{:.6e},{:.6e},{:.4},{:.4},{},{:.4},{},\n",
             p.frequency,
             p.tip_amplitude,
             p.tip_mean,
             p.ball_max_deg,
             p.ball_amplitude_deg,
             p.impacts,
+            p.flight_fraction,
             p.max_iterations,
         ));
     }

@@ -349,6 +349,7 @@ fn failed_points_have_no_numbers() {
         ball_max_deg: 60.0,
         ball_amplitude_deg: 50.0,
         impacts: 3,
+        flight_fraction: 0.1,
         max_iterations: 5,
         error: None,
     };

@@ -146,7 +146,9 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
         s.file.elements,
         s.file.duration
     );
-    println!("  f [Hz]  A [mm]   D/h free     D/h locked   S_eq free/locked [MPa]   impacts");
+    println!(
+        "  f [Hz]  A [mm]   D/h free     D/h locked   S_eq free/locked [MPa]   impacts  in flight"
+    );
     for p in &points {
         if p.failed() {
             let why = [("free", &p.free.error), ("locked", &p.locked.error)]
@@ -162,7 +164,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             continue;
         }
         println!(
-            "  {:6.3}  {:6.3}   {:10.3e}   {:10.3e}   {:8.2} / {:8.2}       {:5}",
+            "  {:6.3}  {:6.3}   {:10.3e}   {:10.3e}   {:8.2} / {:8.2}       {:5}  {:6.1} %",
             p.frequency,
             p.amplitude * 1e3,
             p.free.damage_rate,
@@ -170,6 +172,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             p.free.equivalent_range / 1e6,
             p.locked.equivalent_range / 1e6,
             p.free.impacts,
+            100.0 * p.free.flight_fraction,
         );
     }
     if let Some((rows, c, n, m)) = &comparison {
