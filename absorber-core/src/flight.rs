@@ -350,28 +350,46 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// The normal force of the track on a rolling ball (`N` of [`crate::ContactForces`]) \[N\];
-    /// zero in flight. One `atan2` (ψ) and one `sin_cos` (θ).
+    /// zero in flight: `N = m_b [−ẍ_A sin θ + (ÿ_A + g_eff) cos θ + ρ θ̇²]` with
+    /// `θ = (R_tr/ρ) ψ − (r_b/ρ) φ`, `ψ = atan2(a₄, a₃)`, `ψ̇ = (a₃ ȧ₄ − a₄ ȧ₃)/|a|²`. It runs
+    /// after every rolling step (the separation test): one `atan2`, one division, one
+    /// `sin_cos`, no copy of the state.
     pub(crate) fn normal_force(&self, s: &State<T, D>) -> T {
-        self.track_forces(s).0
+        if S::EXTRA_DOFS != 1 || s.contact == Contact::InFlight {
+            return T::zero();
+        }
+        let at = |x: &SVector<T, D>, k: usize| x.get(k).copied().unwrap_or(T::zero());
+        let e = Self::END;
+        let (a3, a4) = (T::one() + at(&s.q, e + 2), at(&s.q, e + 3));
+        let (v3, v4) = (at(&s.v, e + 2), at(&s.v, e + 3));
+        let psi = a4.atan2(a3);
+        let psi_rate = (a3 * v4 - a4 * v3) / (a3 * a3 + a4 * a4);
+        let i = &self.inertia;
+        let theta = i.orbit_per_tilt * psi - i.orbit_per_spin * at(&s.q, Self::SPIN);
+        let theta_rate = i.orbit_per_tilt * psi_rate - i.orbit_per_spin * at(&s.v, Self::SPIN);
+        let (sin, cos) = theta.fast_sin_cos();
+        let ball = &self.params.ball;
+        let ya_g = at(&s.a, e + 1) + self.effective_gravity(s.base_accel);
+        ball.mass * (-at(&s.a, e) * sin + ya_g * cos + ball.path_radius() * theta_rate * theta_rate)
     }
 
-    /// `(N, F_t)` of the track on the ball (module doc; zero in flight).
+    /// `(N, F_t)` of the track on the ball (module doc; zero in flight): N from
+    /// [`System::normal_force`], `F_t = m_b [ẍ_A cos θ + (ÿ_A + g_eff) sin θ + ρ θ̈]`.
     pub(crate) fn track_forces(&self, s: &State<T, D>) -> (T, T) {
         if s.contact == Contact::InFlight {
             return (T::zero(), T::zero());
         }
         let x = Self::local(&s.q, &s.v, &s.a);
-        let (psi, psi_rate, psi_accel) = tip::psi_all(&x);
+        let (psi, _, psi_accel) = tip::psi_all(&x);
         let i = &self.inertia;
         let theta = i.orbit_per_tilt * psi - i.orbit_per_spin * x.q[4];
-        let theta_rate = i.orbit_per_tilt * psi_rate - i.orbit_per_spin * x.v[4];
         let theta_accel = i.orbit_per_tilt * psi_accel - i.orbit_per_spin * x.a[4];
         let (sin, cos) = theta.fast_sin_cos();
         let ball = &self.params.ball;
         let rho = ball.path_radius();
         let (xa, ya_g) = (x.a[0], x.a[1] + self.effective_gravity(s.base_accel));
         (
-            ball.mass * (-xa * sin + ya_g * cos + rho * theta_rate * theta_rate),
+            self.normal_force(s),
             ball.mass * (xa * cos + ya_g * sin + rho * theta_accel),
         )
     }
@@ -382,15 +400,31 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     pub(crate) fn separation(
         &self,
         start: &State<T, D>,
-        next: State<T, D>,
+        next: &mut State<T, D>,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<(), Error> {
+        let n_end = self.normal_force(next);
+        if n_end >= T::zero() || !n_end.is_finite() {
+            return Ok(()); // the track pushes: the step stands (the common case, no copy)
+        }
+        *next = self.separate(start, n_end, base_accel, ws, report)?;
+        Ok(())
+    }
+
+    /// The step from `start` redone with the separation inside it (`n_end` < 0 at its end). Kept
+    /// out of line (rare).
+    #[inline(never)]
+    #[cold]
+    fn separate(
+        &self,
+        start: &State<T, D>,
+        n_end: T,
         base_accel: T,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
     ) -> Result<State<T, D>, Error> {
-        let n_end = self.normal_force(&next);
-        if n_end >= T::zero() || !n_end.is_finite() {
-            return Ok(next);
-        }
         let kind = self.params.integrator.newton;
         let h = self.params.integrator.step;
         let tau = separation_fraction(self.normal_force(start), n_end);
@@ -484,7 +518,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// The events of a flight step from `start` whose trial end is `trial`: a landing or a stop,
-    /// whichever comes first, splits the step (module doc).
+    /// whichever comes first, splits the step (module doc). Kept out of line: the rolling step's
+    /// frame does not carry its states.
+    #[inline(never)]
     pub(crate) fn flight_events(
         &self,
         start: &State<T, D>,
@@ -637,7 +673,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             if let Some(spin) = s.q.get_mut(Self::SPIN) {
                 *spin = (i.orbit_per_tilt * psi - theta) / i.orbit_per_spin;
             }
-            s.contact = Contact::Off;
+            // On the track between the stops, or on the arc beyond them.
+            s.contact = if S::STOPS && wrap(theta - psi).abs() > self.params.ball.stop_angle {
+                Contact::Beyond
+            } else {
+                Contact::Off
+            };
             // v⁺ = v⁻ + M_roll⁻¹ B_bᵀ Δ, Δ = m_b (ċ⁻ − ċ_roll(v⁻)).
             let (_, rolling) = self.ball_centre(s);
             let delta = [
@@ -655,7 +696,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             if let Some(spin) = y.get_mut(Self::SPIN) {
                 *spin = -rho * i.orbit_per_spin * along;
             }
-            self.metric_factors(s, Contact::Off, ws)?;
+            self.metric_factors(s, s.contact, ws)?;
             ws.solve(&mut y)?;
             s.v += y;
             let (_, after) = self.ball_centre(s);

@@ -34,6 +34,9 @@ pub enum Contact {
     /// Ball in flight inside the housing ([`crate::flight`]; its centre is the state's
     /// [`State::flight`]).
     InFlight,
+    /// Ball rolling on the arc beyond the stops: it flew over one and landed there
+    /// ([`crate::flight`]); the stops act on it from their other face.
+    Beyond,
 }
 
 /// Which stop.
@@ -341,18 +344,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             separation: None,
             landing: None,
         };
-        let mut next = if start.contact == Contact::InFlight {
+        let mut next = if S::FLIGHT && start.contact == Contact::InFlight {
             // 2'. In flight: a landing or a stop splits the step at the crossing.
             self.flight_events(start, trial, base_accel, ws, &mut report)?
         } else {
             // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
-            let next = self.stop_events(start, trial, base_accel, ws, &mut report)?;
+            let mut next = self.stop_events(start, trial, base_accel, ws, &mut report)?;
             // 3. Separation: a track that would pull the ball lets it fly.
             if self.flies() && report.impact.is_none() {
-                self.separation(start, next, base_accel, ws, &mut report)?
-            } else {
-                next
+                self.separation(start, &mut next, base_accel, ws, &mut report)?;
             }
+            next
         };
         // 4. The clock: whole steps times h (a running sum of h drifts in f32).
         next.steps = start.steps.saturating_add(1);

@@ -141,10 +141,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         match next.contact {
             crate::model::Contact::OnStop(side) => self.hold_on_stop(&mut next, side),
-            crate::model::Contact::InFlight => {
+            crate::model::Contact::InFlight if S::FLIGHT => {
                 next.flight = self.fly(&s.flight, h, self.effective_gravity(base_accel));
             }
-            crate::model::Contact::Off => {}
+            _ => {}
         }
         Ok((next, solved))
     }

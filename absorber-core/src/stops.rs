@@ -27,11 +27,6 @@ use crate::system::{Problem, System};
 use crate::tip::{self, Chain};
 use nalgebra::SVector;
 
-/// A rolling ball starting a step this far beyond a stop \[rad\] still counts as between the
-/// stops (it was put on the stop by an impact, to rounding); farther, it flew over the stop
-/// and rolls on the arc beyond it.
-const BEYOND_MARGIN: f64 = 1e-3;
-
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The stop events of a step from `start` whose trial end is `next`: an impact when the
     /// ball crossed a stop, a release when a held ball would be pulled.
@@ -48,22 +43,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         match next.contact {
             Contact::Off => {
-                let stop = self.params.ball.stop_angle;
-                if !self.flies() {
-                    // The ball never leaves the span between the stops.
-                    if self.relative_angle(&next).abs() > stop {
-                        return self.impact_step(start, &next, true, base_accel, ws, report);
-                    }
-                    return Ok(next);
+                if self.relative_angle(&next).abs() > self.params.ball.stop_angle {
+                    return self.impact_step(start, &next, true, base_accel, ws, report);
                 }
-                // A ball that flew over a stop rolls on the arc beyond it: a crossing from
-                // either face is an impact.
-                let (a0, a1) = self.branch_angles(start, &next);
-                let inside = a0.abs() <= stop + lit(BEYOND_MARGIN);
-                if inside == (a1.abs() <= stop) {
-                    return Ok(next);
+                Ok(next)
+            }
+            // A ball that flew over a stop rolls on the arc beyond it: crossing back is an
+            // impact on the stop's other face.
+            Contact::Beyond if S::FLIGHT => {
+                let (_, a1) = self.branch_angles(start, &next);
+                if a1.abs() < self.params.ball.stop_angle {
+                    return self.impact_step(start, &next, false, base_accel, ws, report);
                 }
-                self.impact_step(start, &next, inside, base_accel, ws, report)
+                Ok(next)
             }
             Contact::OnStop(side) => {
                 let mut next = next;
@@ -72,7 +64,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 }
                 Ok(next)
             }
-            Contact::InFlight => Ok(next), // (flight events: crate::flight)
+            Contact::InFlight | Contact::Beyond => Ok(next), // (flight events: crate::flight)
         }
     }
 
@@ -85,7 +77,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// Splits a step that crossed a stop (module doc), from the span between the stops
-    /// (`inside`) or from the arc beyond them.
+    /// (`inside`) or from the arc beyond them. Kept out of line (rare): the ordinary step's
+    /// frame does not carry its states.
+    #[inline(never)]
     fn impact_step(
         &self,
         start: &State<T, D>,
@@ -100,7 +94,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let stop = self.params.ball.stop_angle;
         let tau;
         let side;
-        if inside && !self.flies() {
+        if inside {
             side = if self.relative_angle(trial) > T::zero() {
                 Side::Positive
             } else {
@@ -231,7 +225,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             impact.impulse = lambda / ball.path_radius();
             impact.energy_loss = lit::<T>(0.5) * (T::one() - e * e) * speed * speed / w;
         }
-        s.contact = Contact::Off;
+        s.contact = if inside {
+            Contact::Off
+        } else {
+            Contact::Beyond
+        };
         if plastic && inside {
             // Stay on the stop if the contact force is compressive.
             let mut held = *s;

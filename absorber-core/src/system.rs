@@ -152,7 +152,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             (BallKind::None, _) => BallMode::Absent,
             (BallKind::Locked, _) => BallMode::Held(T::zero()),
             (BallKind::Free, Contact::Off) if plumb => BallMode::Plumb,
-            (BallKind::Free, Contact::Off) => BallMode::Free,
+            (BallKind::Free, Contact::Off | Contact::Beyond) => BallMode::Free,
             (BallKind::Free, Contact::OnStop(side)) => {
                 BallMode::Held(side.sign::<T>() * self.params.ball.stop_angle)
             }

@@ -811,7 +811,7 @@ typedef struct AbsorberStateInfo_f32 {
     uint32_t dofs;
     /**
      * Ball contact: 0 on the track off the stops, +1 / −1 resting on the positive / negative
-     * stop, 2 in flight.
+     * stop, 2 in flight, 3 rolling on the arc beyond the stops.
      */
     int32_t contact;
     /**
@@ -852,7 +852,7 @@ typedef struct AbsorberStateInfo_f64 {
     uint32_t dofs;
     /**
      * Ball contact: 0 on the track off the stops, +1 / −1 resting on the positive / negative
-     * stop, 2 in flight.
+     * stop, 2 in flight, 3 rolling on the arc beyond the stops.
      */
     int32_t contact;
     /**

@@ -491,7 +491,7 @@ pub struct AbsorberStateInfo<T> {
     /// Number of unknowns D (length of q, v, a).
     pub dofs: u32,
     /// Ball contact: 0 on the track off the stops, +1 / −1 resting on the positive / negative
-    /// stop, 2 in flight.
+    /// stop, 2 in flight, 3 rolling on the arc beyond the stops.
     pub contact: i32,
     /// Whole steps since the start.
     pub steps: u64,
@@ -651,6 +651,7 @@ fn contact_code(c: Contact) -> i32 {
         Contact::OnStop(Side::Positive) => 1,
         Contact::OnStop(Side::Negative) => -1,
         Contact::InFlight => 2,
+        Contact::Beyond => 3,
     }
 }
 

@@ -71,7 +71,7 @@ fn fingerprint(model: *mut AbsorberModel, monitor: Option<*mut AbsorberMonitor>)
     let (mut errors, mut record_errors) = (0u32, 0u32);
     let (mut q, mut v, mut a) = ([0f32; ABSORBER_MAX_DOFS], [0f32; 25], [0f32; 25]);
     for k in 1..=STEPS {
-        let accel = base_accel(k, h);
+        let accel = base_accel(k, h, absorber_firmware::FREQUENCY_HZ);
         let mut r = AbsorberReportF32::default();
         // SAFETY: live handle, valid report.
         let s = unsafe { absorber_step_f32(model, accel, &mut r) };
@@ -120,11 +120,12 @@ fn fingerprint(model: *mut AbsorberModel, monitor: Option<*mut AbsorberMonitor>)
         hash.word(info.time.to_bits());
         hash.word(info.base_accel.to_bits());
         // The firmware's contact words: 0 on the track, 1 / 2 on the positive / negative stop,
-        // 3 in flight followed by the ball's centre and velocity.
+        // 3 in flight followed by the ball's centre and velocity, 4 beyond the stops.
         hash.word(match info.contact {
             0 => 0,
             1 => 1,
             2 => 3,
+            3 => 4,
             _ => 2,
         });
         if info.contact == 2 {

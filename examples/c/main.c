@@ -138,8 +138,12 @@ static struct summary run(AbsorberModel *m, AbsorberMonitor *mon, float h)
         word(bits(info.time));
         word(bits(info.base_accel));
         /* The firmware's contact words: 0 on the track, 1 / 2 on the positive / negative stop,
-         * 3 in flight followed by the ball's centre and velocity. */
-        word(info.contact == 0 ? 0u : info.contact == 1 ? 1u : info.contact == 2 ? 3u : 2u);
+         * 3 in flight followed by the ball's centre and velocity, 4 beyond the stops. */
+        word(info.contact == 0   ? 0u
+             : info.contact == 1 ? 1u
+             : info.contact == 2 ? 3u
+             : info.contact == 3 ? 4u
+                                 : 2u);
         if (info.contact == 2) {
             for (int i = 0; i < 2; i++) word(bits(info.ball_centre[i]));
             for (int i = 0; i < 2; i++) word(bits(info.ball_velocity[i]));

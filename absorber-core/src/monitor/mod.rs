@@ -303,7 +303,10 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
         }
         if model.in_flight() {
             f.samples_in_flight = f.samples_in_flight.saturating_add(1);
-        } else if model.state().contact == crate::Contact::Off {
+        } else if matches!(
+            model.state().contact,
+            crate::Contact::Off | crate::Contact::Beyond
+        ) {
             if let Some(mu) = model.contact_forces().and_then(|c| c.required_friction()) {
                 f.peak_rolling_friction = f.peak_rolling_friction.max(mu);
             }

@@ -469,7 +469,7 @@ impl FullSolver {
                     Mode::Held(side.sign::<f64>() * self.params.ball.stop_angle)
                 }
                 // (not set by this solver: its ball stays on the track)
-                Contact::InFlight => Mode::Free,
+                Contact::InFlight | Contact::Beyond => Mode::Free,
             },
         }
     }
@@ -1384,7 +1384,7 @@ impl FullSolver {
                         next.contact = Contact::Off;
                     }
                 }
-                Contact::InFlight => {}
+                Contact::InFlight | Contact::Beyond => {}
             }
         }
         self.state = next;

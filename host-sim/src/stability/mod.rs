@@ -349,6 +349,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Probe for CoreProbe<T, S
             absorber_core::Contact::OnStop(absorber_core::Side::Positive) => 1,
             absorber_core::Contact::OnStop(absorber_core::Side::Negative) => 2,
             absorber_core::Contact::InFlight => 3,
+            absorber_core::Contact::Beyond => 4,
         });
         (b, finite)
     }
@@ -461,6 +462,7 @@ impl Probe for FullProbe {
             absorber_core::Contact::OnStop(absorber_core::Side::Positive) => 1,
             absorber_core::Contact::OnStop(absorber_core::Side::Negative) => 2,
             absorber_core::Contact::InFlight => 3,
+            absorber_core::Contact::Beyond => 4,
         });
         (b, finite)
     }

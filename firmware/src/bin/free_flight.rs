@@ -1,0 +1,19 @@
+//! `fw-free-flight`: the paper's absorber driven at 4.10 Hz, where its ball is in flight about
+//! 40 % of the time (`absorber_core::flight`): what flight steps cost. 3 elements, D = 13.
+//!
+//! On `thumbv7em-none-eabihf` this is the firmware; on the host it prints the reference.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+type M = absorber_firmware::InFlight<absorber_core::FreeBallModel<f32, 3, 13>>;
+
+#[cfg(target_os = "none")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    static mut MODEL: core::mem::MaybeUninit<M> = core::mem::MaybeUninit::uninit();
+    absorber_firmware::target::target_main::<M>(MODEL)
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    absorber_firmware::host_main::<M>()
+}
