@@ -41,6 +41,7 @@ pub mod dual;
 pub mod energy;
 pub mod error;
 pub mod linalg;
+pub mod loads;
 pub mod model;
 pub mod modes;
 pub mod monitor;
@@ -58,6 +59,7 @@ pub mod trig;
 
 pub use energy::Energies;
 pub use error::Error;
+pub use loads::{ArmParams, Loads, PointMass};
 pub use model::{Contact, Impact, Model, Side, State, StepReport};
 pub use outputs::ContactForces;
 pub use params::{
@@ -65,7 +67,9 @@ pub use params::{
     TipParams,
 };
 pub use scalar::Real;
-pub use scene::{BallKind, BeamOnly, FreeBall, FreeBallNoStops, LockedBall, Scene, TipMass};
+pub use scene::{
+    Arm, BallKind, BeamOnly, FreeBall, FreeBallNoStops, Loaded, LockedBall, Scene, TipMass,
+};
 
 /// Beam alone, `N` elements, `D = 4N` unknowns.
 pub type BeamModel<T, const N: usize, const D: usize> = Model<T, BeamOnly, N, D>;
