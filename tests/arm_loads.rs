@@ -118,3 +118,22 @@ fn full_solver_zero_loads_are_bit_identical() {
     }
     let _ = Loaded::<BeamOnly>::default();
 }
+
+/// `scenes/mast-arm.toml` parses, and its arm has f1 in the measured 0.8–1.2 Hz (full
+/// solver, 16 elements) and 0.3 % stiffness-proportional damping at f1 (within the measured
+/// 0.1–0.45 %).
+#[test]
+fn mast_arm_scene_has_a_measured_first_frequency_and_damping() {
+    let s = absorber::host_sim::scene::Scene::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/mast-arm.toml"
+    ))
+    .expect("scene");
+    let p = s.params().expect("params");
+    let arm = s.file.arm.as_ref().expect("arm").params().expect("arm");
+    let full = FullSolver::arm_at_rest(p, SceneKind::BeamOnly, 16, &arm, 0.0).expect("arm");
+    let f1 = full.frequencies().expect("modes")[0];
+    assert!((0.8..=1.2).contains(&f1), "f1 = {f1} Hz");
+    let zeta = p.damping.stiffness_proportional * std::f64::consts::PI * f1;
+    assert!((0.001..=0.0045).contains(&zeta), "ζ1 = {zeta}");
+}

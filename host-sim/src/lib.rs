@@ -31,3 +31,4 @@ pub mod stability;
 pub mod sweep;
 pub mod tune;
 pub mod validation;
+pub mod wind;
