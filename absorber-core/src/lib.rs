@@ -40,6 +40,7 @@ pub mod beam;
 pub mod dual;
 pub mod energy;
 pub mod error;
+pub mod estimator;
 pub mod linalg;
 pub mod loads;
 pub mod model;

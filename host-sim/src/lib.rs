@@ -17,6 +17,7 @@ pub mod calibrate;
 pub mod cli;
 pub mod commands;
 pub mod core_sim;
+pub mod estimate;
 pub mod excitation;
 pub mod fatigue;
 pub mod fft;
