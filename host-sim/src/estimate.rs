@@ -488,7 +488,11 @@ pub fn twin(
     let (d_true, c_true, r_true) = dt.finish();
     let (d_est, c_est, r_est) = de.finish();
     let max_range = r_true.iter().fold(0.0f64, |a, b| a.max(b.0));
-    let bin = 1e6;
+    // A 1, 2, 5 or 10 MPa… bin: at most 25 bins up to the largest true range.
+    let bin = [1e6, 2e6, 5e6, 1e7, 2e7, 5e7, 1e8]
+        .into_iter()
+        .find(|b| max_range / b < 25.0)
+        .unwrap_or(1e8);
     // Bins up to the largest true range (at most 1000); larger estimated ranges in the last.
     let bins = ((max_range / bin).floor() as usize + 1).min(1000);
     let hist = |r: &[(f64, f64)]| {
