@@ -25,7 +25,7 @@ pub type ElementVector<T> = SVector<T, 8>;
 /// 5-point Gauss–Legendre rule on `[0, 1]`: exact to degree 9. The axial force and tangent
 /// integrands are of degree 8 in ξ (ε is of degree 4, `S_xᵀ r′` of degree 4), so the rule
 /// integrates them exactly.
-const GAUSS5: [(f64, f64); 5] = [
+pub(crate) const GAUSS5: [(f64, f64); 5] = [
     (0.046_910_077_030_668_004, 0.118_463_442_528_094_54),
     (0.230_765_344_947_158_45, 0.239_314_335_249_683_23),
     (0.5, 0.284_444_444_444_444_45),
@@ -219,6 +219,23 @@ impl<T: Real> Element<T> {
         q[3] = -w * twelfth;
         q[5] = -w * half;
         q[7] = w * twelfth;
+        q
+    }
+
+    /// Generalized force of a uniform vertical line load `w` \[N/m, positive up\] on the
+    /// element, `Q_w = ∫ S₂ᵀ w dx = w l [0, ½, 0, l/12, 0, ½, 0, −l/12]ᵀ` (the integral of the
+    /// Hermite cubics of eq. 5; the same vector as [`Element::gravity_force`] with `−ρ a g_eff`
+    /// replaced by `w`). The one source of the load integral for the core and the full solver.
+    pub fn line_load_force(&self, w: T) -> ElementVector<T> {
+        let l = self.length;
+        let total = w * l;
+        let half = lit::<T>(0.5);
+        let twelfth = l / lit::<T>(12.0);
+        let mut q = ElementVector::zeros();
+        q[1] = total * half;
+        q[3] = total * twelfth;
+        q[5] = total * half;
+        q[7] = -total * twelfth;
         q
     }
 

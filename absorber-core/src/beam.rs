@@ -141,6 +141,56 @@ impl<T: Real> Beam<T> {
         }
     }
 
+    /// Adds element `k`'s residual into `r` with the applied force `applied` (its weight plus
+    /// any external load, [`crate::loads`]): one element of [`Beam::residual`] with this
+    /// element's own matrices (a real arm's elements differ).
+    pub fn element_residual<const D: usize>(
+        &self,
+        k: usize,
+        (q, v, a): (&SVector<T, D>, &SVector<T, D>, &SVector<T, D>),
+        applied: &ElementVector<T>,
+        r: &mut SVector<T, D>,
+    ) {
+        let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
+        let axial = self.quadrature.force(&u);
+        self.add_element_residual(k, &u, (&ue, &ae), &axial, applied, r);
+    }
+
+    /// Adds element `k`'s residual (applied force `applied`) into `r` and its Newton matrix
+    /// `(c_m M₄ + (c_q + c_v c) K₄) ⊗ I₂ + c_q K_l` into `jac`: one element of
+    /// [`Beam::residual_and_jacobian`] with this element's own matrices.
+    #[allow(clippy::too_many_arguments)]
+    pub fn element_residual_and_jacobian<const D: usize>(
+        &self,
+        k: usize,
+        (q, v, a): (&SVector<T, D>, &SVector<T, D>, &SVector<T, D>),
+        applied: &ElementVector<T>,
+        ch: &Chain<T>,
+        r: &mut SVector<T, D>,
+        jac: &mut BandMatrix<T, D>,
+    ) {
+        let c_k = ch.c_q + ch.c_v * self.damping;
+        let mut block = [[T::zero(); 8]; 8];
+        for (i, (mr, kr)) in self.mass4.iter().zip(self.stiffness4.iter()).enumerate() {
+            for (j, (m, kk)) in mr.iter().zip(kr.iter()).enumerate() {
+                let value = ch.c_m * *m + c_k * *kk;
+                for dir in 0..2 {
+                    if let Some(x) = block
+                        .get_mut(2 * i + dir)
+                        .and_then(|row| row.get_mut(2 * j + dir))
+                    {
+                        *x = value;
+                    }
+                }
+            }
+        }
+        let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
+        let axial = self.quadrature.add_tangent(&u, ch.c_q, &mut block);
+        let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
+        jac.add_block8(first, skip, &block);
+        self.add_element_residual(k, &u, (&ue, &ae), &axial, applied, r);
+    }
+
     /// Adds the beam's residual into `r` and its Newton matrix along the chain `ch` into `jac`:
     /// per element `(c_m M₄ + (c_q + c_v c) K₄) ⊗ I₂ + c_q K_l`, built as one 8×8 block and
     /// added to the band row by row.

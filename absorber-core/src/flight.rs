@@ -60,6 +60,10 @@ use crate::system::{Problem, System};
 use crate::tip::{self, Chain};
 use nalgebra::SVector;
 
+/// A flying ball whose polar angle starts a step this close beyond a stop \[rad\] is still on
+/// the track's side of it (an impact put it on the stop line, to rounding).
+const STOP_MARGIN: f64 = 1e-3;
+
 /// The ball's centre while it flies, in the frame translating with the base (x along the
 /// undeformed beam from the clamp, y up): position \[m\], velocity \[m/s\], acceleration
 /// \[m/s²\] and the generalized-α variable of the acceleration. Read only while the state's
@@ -287,7 +291,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let (alpha0, rate0) = self.flight_relative_angle(from);
         let (raw1, rate1) = self.flight_relative_angle(to);
         let alpha1 = alpha0 + wrap(raw1 - alpha0);
-        let inside = alpha0.abs() <= stop;
+        // A ball just put on the stop line by an impact (to rounding) is still on the track's
+        // side: without the margin the rest of the step would reverse its impulse.
+        let inside = alpha0.abs() <= stop + lit(STOP_MARGIN);
         if inside == (alpha1.abs() <= stop) {
             return None;
         }
@@ -510,9 +516,23 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             if self.relative(&end).r > self.params.ball.path_radius() {
                 self.land(&mut end, ws, report)?;
             }
-        } else if S::STOPS && self.relative_angle(&end).abs() > self.params.ball.stop_angle {
-            // Landed and rolled onto a stop within the rest: it rests there (plastic).
-            self.rest_on_stop(&mut end, ws, report)?;
+        } else if S::STOPS {
+            let stop = self.params.ball.stop_angle;
+            let alpha = wrap(self.relative_angle(&end));
+            if end.contact == Contact::Off && alpha.abs() > stop {
+                // Landed and rolled onto a stop within the rest: it rests there (plastic).
+                self.rest_on_stop(&mut end, ws, report)?;
+            } else if end.contact == Contact::Beyond && alpha.abs() < stop {
+                // Landed beyond a stop and rolled back onto its other face: an impact there.
+                let side = if is_positive(alpha) {
+                    Side::Positive
+                } else {
+                    Side::Negative
+                };
+                let impact = self.impact(&mut end, side, false, ws)?;
+                report.impact = report.impact.or(Some(impact));
+                self.restart_acceleration(&mut end, ws, report)?;
+            }
         }
         Ok(end)
     }

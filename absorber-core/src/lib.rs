@@ -40,8 +40,10 @@ pub mod beam;
 pub mod dual;
 pub mod energy;
 pub mod error;
+pub mod estimator;
 pub mod flight;
 pub mod linalg;
+pub mod loads;
 pub mod model;
 pub mod modes;
 pub mod monitor;
@@ -60,6 +62,7 @@ pub mod trig;
 pub use energy::Energies;
 pub use error::Error;
 pub use flight::{Flight, Landing};
+pub use loads::{ArmParams, Loads, PointMass};
 pub use model::{Contact, Impact, Model, Side, State, StepReport};
 pub use outputs::ContactForces;
 pub use params::{
@@ -68,7 +71,8 @@ pub use params::{
 };
 pub use scalar::Real;
 pub use scene::{
-    BallKind, BeamOnly, FreeBall, FreeBallNoFlight, FreeBallNoStops, LockedBall, Scene, TipMass,
+    Arm, BallKind, BeamOnly, FreeBall, FreeBallNoFlight, FreeBallNoStops, Loaded, LockedBall,
+    Scene, TipMass,
 };
 
 /// Beam alone, `N` elements, `D = 4N` unknowns.

@@ -158,7 +158,7 @@ pub const START_BEYOND_STOP: Error = Error::InvalidParameter {
 
 /// The reduced model of scene `S` with `N` elements and `D = 4N + S::EXTRA_DOFS` unknowns.
 #[derive(Clone, Debug)]
-pub struct Model<T, S, const N: usize, const D: usize> {
+pub struct Model<T: Real, S: Scene, const N: usize, const D: usize> {
     /// The equations (parameters and everything precomputed from them).
     pub(crate) sys: System<T, S, N, D>,
     pub(crate) state: State<T, D>,

@@ -24,6 +24,10 @@
 //! let _ = BeamModel::<f64, 0, 0>::new(Params::default());
 //! ```
 
+use crate::loads::{ArmData, Loads, SceneData};
+use crate::scalar::Real;
+use core::marker::PhantomData;
+
 /// How the ball is held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BallKind {
@@ -54,12 +58,17 @@ pub trait Scene: Copy + Default + 'static {
     };
     /// Short name for reports.
     const NAME: &'static str;
+    /// What the model stores beyond the paper's scene ([`crate::loads::SceneData`]): `()` for
+    /// the paper's scenes (nothing: their RAM, flash and results are unchanged), the loads for
+    /// [`Loaded`], loads and per-element sections for [`Arm`].
+    type Data<T: Real, const N: usize>: SceneData<T, N>;
 }
 
 /// The cantilever alone.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BeamOnly;
 impl Scene for BeamOnly {
+    type Data<T: Real, const N: usize> = ();
     const HAS_TIP: bool = false;
     const BALL: BallKind = BallKind::None;
     const STOPS: bool = false;
@@ -70,6 +79,7 @@ impl Scene for BeamOnly {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TipMass;
 impl Scene for TipMass {
+    type Data<T: Real, const N: usize> = ();
     const HAS_TIP: bool = true;
     const BALL: BallKind = BallKind::None;
     const STOPS: bool = false;
@@ -80,6 +90,7 @@ impl Scene for TipMass {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LockedBall;
 impl Scene for LockedBall {
+    type Data<T: Real, const N: usize> = ();
     const HAS_TIP: bool = true;
     const BALL: BallKind = BallKind::Locked;
     const STOPS: bool = false;
@@ -90,6 +101,7 @@ impl Scene for LockedBall {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FreeBall;
 impl Scene for FreeBall {
+    type Data<T: Real, const N: usize> = ();
     const HAS_TIP: bool = true;
     const BALL: BallKind = BallKind::Free;
     const STOPS: bool = true;
@@ -102,6 +114,7 @@ impl Scene for FreeBall {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FreeBallNoFlight;
 impl Scene for FreeBallNoFlight {
+    type Data<T: Real, const N: usize> = ();
     const HAS_TIP: bool = true;
     const BALL: BallKind = BallKind::Free;
     const STOPS: bool = true;
@@ -112,9 +125,36 @@ impl Scene for FreeBallNoFlight {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FreeBallNoStops;
 impl Scene for FreeBallNoStops {
+    type Data<T: Real, const N: usize> = ();
     const HAS_TIP: bool = true;
     const BALL: BallKind = BallKind::Free;
     const STOPS: bool = false;
     const FLIGHT: bool = true;
     const NAME: &'static str = "free-nostops";
+}
+
+/// Scene `S` with external loads on the beam ([`crate::loads::Loads`], fed per sample by
+/// [`crate::Model::step_with_loads`]): the same bodies and unknowns as `S`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Loaded<S>(PhantomData<S>);
+impl<S: Scene> Scene for Loaded<S> {
+    const HAS_TIP: bool = S::HAS_TIP;
+    const BALL: BallKind = S::BALL;
+    const STOPS: bool = S::STOPS;
+    const FLIGHT: bool = S::FLIGHT;
+    const NAME: &'static str = S::NAME;
+    type Data<T: Real, const N: usize> = Loads<T, N>;
+}
+
+/// Scene `S` on a real arm: external loads and per-element sections (a tapered tube with
+/// point masses, [`crate::loads::ArmParams`], set by [`crate::Model::with_arm`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Arm<S>(PhantomData<S>);
+impl<S: Scene> Scene for Arm<S> {
+    const HAS_TIP: bool = S::HAS_TIP;
+    const BALL: BallKind = S::BALL;
+    const STOPS: bool = S::STOPS;
+    const FLIGHT: bool = S::FLIGHT;
+    const NAME: &'static str = S::NAME;
+    type Data<T: Real, const N: usize> = ArmData<T, N>;
 }

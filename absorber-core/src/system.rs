@@ -10,6 +10,7 @@ use crate::beam::Beam;
 use crate::dual::Plain;
 use crate::error::Error;
 use crate::linalg::{BandMatrix, PIVOT_RATIO};
+use crate::loads::SceneData;
 use crate::model::{Contact, State};
 use crate::newton::MAX_STEP;
 use crate::params::Params;
@@ -21,7 +22,7 @@ use nalgebra::{SMatrix, SVector};
 
 /// What stays fixed during a run of scene `S` with `N` elements and `D` unknowns.
 #[derive(Clone, Debug)]
-pub struct System<T, S, const N: usize, const D: usize> {
+pub struct System<T: Real, S: Scene, const N: usize, const D: usize> {
     pub(crate) params: Params<T>,
     pub(crate) beam: Beam<T>,
     pub(crate) inertia: TipInertia<T>,
@@ -42,6 +43,8 @@ pub struct System<T, S, const N: usize, const D: usize> {
     pub(crate) slow: T,
     /// The generalized-α recursion's constants (`None`: Newmark).
     pub(crate) alpha: Option<crate::newmark::AlphaRecursion<T>>,
+    /// What the scene adds: loads, per-element sections (`()` for the paper's scenes).
+    pub(crate) data: S::Data<T, N>,
     _scene: PhantomData<S>,
 }
 
@@ -100,14 +103,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 }
             }
         }
+        let beam = Beam::with_lumping(
+            element,
+            params.damping.stiffness_proportional,
+            params.calibration.mass_lumping,
+        );
         Self {
             inertia: TipInertia::new(&params, S::HAS_TIP, S::BALL),
             flight_inertia: TipInertia::new(&params, S::HAS_TIP, BallKind::None),
-            beam: Beam::with_lumping(
-                element,
-                params.damping.stiffness_proportional,
-                params.calibration.mass_lumping,
-            ),
+            data: SceneData::uniform(&beam),
+            beam,
             params,
             equilibrium: SVector::zeros(),
             scale,
@@ -188,7 +193,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     ) -> T {
         let [q, v, a] = qva;
         r.fill(T::zero());
-        self.beam.residual(N, (q, v, a), g_eff, r);
+        if self.data.loads().is_none() && self.data.sections().is_none() {
+            self.beam.residual(N, (q, v, a), g_eff, r);
+        } else {
+            for k in 0..N {
+                let (b, applied) = self.element_and_force(k, g_eff);
+                b.element_residual(k, (q, v, a), &applied, r);
+            }
+            self.subtract_tip_force(r);
+        }
         if !S::HAS_TIP {
             return T::zero();
         }
@@ -236,8 +249,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let [q, v, a] = qva;
         r.fill(T::zero());
         jac.clear();
-        self.beam
-            .residual_and_jacobian(N, (q, v, a), g_eff, ch, r, jac);
+        if self.data.loads().is_none() && self.data.sections().is_none() {
+            self.beam
+                .residual_and_jacobian(N, (q, v, a), g_eff, ch, r, jac);
+        } else {
+            for k in 0..N {
+                let (b, applied) = self.element_and_force(k, g_eff);
+                b.element_residual_and_jacobian(k, (q, v, a), &applied, ch, r, jac);
+            }
+            self.subtract_tip_force(r);
+        }
         if !S::HAS_TIP {
             return T::zero();
         }
@@ -261,6 +282,32 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
         }
         force
+    }
+
+    /// Element `k`'s matrices and applied force (weight, point masses' weight, line load) of a
+    /// scene with loads or sections ([`crate::loads`]).
+    #[inline]
+    pub(crate) fn element_and_force(
+        &self,
+        k: usize,
+        g_eff: T,
+    ) -> (&Beam<T>, crate::ancf::ElementVector<T>) {
+        let (b, mut applied) = match self.data.sections().and_then(|s| s.get(k)) {
+            Some(sec) => (&sec.beam, sec.weight(g_eff)),
+            None => (&self.beam, self.beam.element.gravity_force(g_eff)),
+        };
+        if let Some(w) = self.data.loads().and_then(|l| l.line_load.get(k)) {
+            applied += b.element.line_load_force(*w);
+        }
+        (b, applied)
+    }
+
+    /// `r₂` of the end node: `r −= P` for the tip force P (positive up).
+    #[inline]
+    fn subtract_tip_force(&self, r: &mut SVector<T, D>) {
+        if let (Some(l), Some(x)) = (self.data.loads(), r.get_mut(Self::END + 1)) {
+            *x -= l.tip_force;
+        }
     }
 
     /// Residual, Newton matrix and contact force by value (off the step path: modes, tests).

@@ -659,7 +659,7 @@ fn contact_code(c: Contact) -> i32 {
 trait Dofs {
     const DOFS: usize;
 }
-impl<T, S, const N: usize, const D: usize> Dofs for Model<T, S, N, D> {
+impl<T: Real, S: Scene, const N: usize, const D: usize> Dofs for Model<T, S, N, D> {
     const DOFS: usize = D;
 }
 

@@ -92,6 +92,36 @@ pub enum Command {
     /// Writes docs/validation.md: every quantitative claim of the paper beside this model's
     /// numbers (3 elements and a converged mesh), with verdicts, reasons and figures.
     Validation(ValidationArgs),
+    /// Twin experiment of the root-stress estimator on a real arm: truth = full solver (16
+    /// elements, f64) under the scene's `[[loads]]`; measurement = its tip acceleration with
+    /// the `[sensor]`'s noise and bias; estimate = the core (3 elements, f32, calibrated) fed
+    /// only that. Prints the stress RMS error, the Miner damage ratio and the stress-range
+    /// histograms; with `--out`, writes `estimate.csv`, `estimate_stress.png`,
+    /// `estimate_histogram.png` and `estimate.json`.
+    Estimate(EstimateArgs),
+}
+
+/// `estimate`.
+#[derive(Args, Debug)]
+pub struct EstimateArgs {
+    /// Scene TOML file with `[arm]`, `[sensor]` and `[[loads]]` (e.g. scenes/mast-arm.toml).
+    #[arg(long, short)]
+    pub scene: String,
+    /// Simulated time [s] (default: the scene's).
+    #[arg(long, allow_negative_numbers = true)]
+    pub duration: Option<f64>,
+    /// Standard deviation of the estimator's tip-load random walk per sample [N].
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    pub load_step: f64,
+    /// Time constant of the estimator's tip-load model (Gauss–Markov) [s].
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true)]
+    pub load_time: f64,
+    /// Directory for the CSV, plots and JSON.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Machine-readable output (JSON on stdout).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `validation` options.

@@ -385,6 +385,138 @@ pub struct SceneFile {
     /// Calibration of the reduced beam (`host-sim calibrate`; none by default).
     #[serde(skip_serializing_if = "CalibrationSection::is_identity")]
     pub calibration: CalibrationSection,
+    /// A real arm: tapered tube and signal heads (replaces the uniform `[beam]` section's mass,
+    /// area and inertia; see `absorber_core::loads`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm: Option<ArmSection>,
+    /// Loads on the arm (`[[loads]]`, summed; see [`crate::wind`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub loads: Vec<crate::wind::LoadComponent>,
+    /// The tip accelerometer of a monitor (`host-sim estimate`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensor: Option<SensorSection>,
+}
+
+/// `[arm]`: a tapered circular tube with signal heads ([`absorber_core::ArmParams`]).
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArmSection {
+    /// Outer diameter at the root \[m\].
+    pub root_diameter: f64,
+    /// Outer diameter at the tip \[m\].
+    pub tip_diameter: f64,
+    /// Wall thickness \[m\].
+    pub wall: f64,
+    /// Density \[kg/m³\].
+    #[serde(default = "steel_density")]
+    pub density: f64,
+    /// Signal heads and other point masses (at most 6).
+    #[serde(default)]
+    pub heads: Vec<HeadSection>,
+    /// AASHTO detail category of the root connection (`A` … `E'`).
+    #[serde(default = "default_detail")]
+    pub detail: String,
+}
+
+fn steel_density() -> f64 {
+    7850.0
+}
+
+fn default_detail() -> String {
+    "E'".into()
+}
+
+/// One `[[arm.heads]]` entry.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeadSection {
+    /// Distance from the root \[m\].
+    pub position: f64,
+    /// Mass \[kg\].
+    pub mass: f64,
+}
+
+/// `[sensor]`: a MEMS accelerometer at the arm tip, vertical axis.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSection {
+    /// Noise density \[µg/√Hz\].
+    pub noise_density_ug: f64,
+    /// Constant bias \[mg\] (unknown to the estimator).
+    pub bias_mg: f64,
+    /// Full-scale range ± \[g\] (readings clip there).
+    pub range_g: f64,
+    /// Output data rate \[Hz\] (the estimator's sample rate).
+    pub rate: f64,
+    /// Bandwidth of the sensor's filter \[Hz\] (the noise is white up to it).
+    pub bandwidth: f64,
+    /// Seed of the noise.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+impl ArmSection {
+    /// The core's arm parameters. Errors name the key.
+    pub fn params(&self) -> Result<absorber_core::ArmParams<f64>> {
+        use absorber_core::loads::{PointMass, MAX_POINT_MASSES};
+        if self.heads.len() > MAX_POINT_MASSES {
+            bail!(
+                "invalid value for `arm.heads`: {} heads (at most {MAX_POINT_MASSES})",
+                self.heads.len()
+            );
+        }
+        let mut point_masses = [PointMass {
+            position: 0.0,
+            mass: 0.0,
+        }; MAX_POINT_MASSES];
+        for (slot, h) in point_masses.iter_mut().zip(&self.heads) {
+            *slot = PointMass {
+                position: h.position,
+                mass: h.mass,
+            };
+        }
+        Ok(absorber_core::ArmParams {
+            root_diameter: self.root_diameter,
+            tip_diameter: self.tip_diameter,
+            wall: self.wall,
+            density: self.density,
+            point_masses,
+        })
+    }
+
+    /// The AASHTO detail category named by `detail`.
+    pub fn detail_category(&self) -> Result<absorber_core::monitor::fatigue::DetailCategory> {
+        use absorber_core::monitor::fatigue::DetailCategory;
+        DetailCategory::ALL
+            .into_iter()
+            .find(|c| c.name() == self.detail)
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "invalid value for `arm.detail`: `{}` (one of A, B, B', C, C', D, E, E')",
+                    self.detail
+                )
+            })
+    }
+}
+
+impl SensorSection {
+    /// Checks the values (errors name the key).
+    pub fn validate(&self) -> Result<()> {
+        finite_positive(self.noise_density_ug, "sensor.noise_density_ug")?;
+        finite_positive(self.range_g, "sensor.range_g")?;
+        finite_positive(self.rate, "sensor.rate")?;
+        finite_positive(self.bandwidth, "sensor.bandwidth")?;
+        if !self.bias_mg.is_finite() {
+            bail!("invalid value for `sensor.bias_mg`: must be finite");
+        }
+        if self.bandwidth > 0.5 * self.rate {
+            bail!(
+                "invalid value for `sensor.bandwidth`: {} Hz (at most half of `sensor.rate`)",
+                self.bandwidth
+            );
+        }
+        Ok(())
+    }
 }
 
 impl Default for BeamSection {
@@ -509,6 +641,9 @@ impl Default for SceneFile {
             excitation: ExcitationSection::default(),
             outputs: OutputsSection::default(),
             calibration: CalibrationSection::default(),
+            arm: None,
+            loads: Vec::new(),
+            sensor: None,
         }
     }
 }
@@ -622,6 +757,24 @@ impl Scene {
                     bail!("`excitation.amplitude`/`excitation.frequency` are only for type = \"harmonic\"");
                 }
             }
+        }
+        if let Some(arm) = &f.arm {
+            arm.detail_category()?;
+            arm.params()?
+                .validate(&p.beam)
+                .map_err(|e| map_core_error(e, self))?;
+            if f.kind != Kind::Beam {
+                bail!("`[arm]` needs `kind = \"beam\"` (heads are `[[arm.heads]]` point masses)");
+            }
+        }
+        if !f.loads.is_empty() {
+            let Some(arm) = &f.arm else {
+                bail!("`[[loads]]` needs an `[arm]` (the loads act on the arm's projected width)");
+            };
+            crate::wind::LoadModel::new(&f.loads, taper_of(arm, f.beam.length), &self.base_dir)?;
+        }
+        if let Some(sensor) = &f.sensor {
+            sensor.validate()?;
         }
         let o = &f.outputs;
         if !o.transient.is_finite() || o.transient < 0.0 {
@@ -824,6 +977,9 @@ impl Scene {
                 w.push(m);
             }
         }
+        if f.arm.is_some() || !f.loads.is_empty() {
+            w.push("warning: `[arm]`, `[[loads]]` and `[sensor]` are used by `estimate` and `tune`; the other commands model the uniform `[beam]` shaken at its base".into());
+        }
         w
     }
 
@@ -995,5 +1151,14 @@ fn one_line(e: &toml::de::Error, text: &str, path: &str) -> anyhow::Error {
         anyhow!("{msg}{at}")
     } else {
         anyhow!("`{path}`: {msg}{at}")
+    }
+}
+
+/// The wind's view of an arm: its outer diameter along the length.
+pub fn taper_of(arm: &ArmSection, length: f64) -> crate::wind::Taper {
+    crate::wind::Taper {
+        length,
+        root: arm.root_diameter,
+        tip: arm.tip_diameter,
     }
 }

@@ -364,7 +364,7 @@ fn failed_points_have_no_numbers() {
     assert!(rows[1].starts_with("4,ok,1.000000e-2,"));
     assert_eq!(
         rows[2],
-        "4.1,failed,,,,,,,step 7 (t = 0.021 s) failed: the solver did not converge"
+        "4.1,failed,,,,,,,,step 7 (t = 0.021 s) failed: the solver did not converge"
     );
 }
 
@@ -485,7 +485,7 @@ fn a_sweep_with_a_failed_point_marks_it_and_exits_3() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("1 of 2 sweep runs failed"));
     let csv = std::fs::read_to_string(d.join("sweep.csv")).unwrap();
     assert!(csv.contains("\n3.9,ok,"), "{csv}");
-    assert!(csv.contains("\n4.13,failed,,,,,,,step "), "{csv}");
+    assert!(csv.contains("\n4.13,failed,,,,,,,,step "), "{csv}");
     let m = manifest(&d, "sweep");
     assert_eq!(m["status"], "points-failed");
     assert_eq!(names(&m), ["sweep.csv", "sweep.png"]);

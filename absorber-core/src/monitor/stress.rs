@@ -151,14 +151,16 @@ fn reaction_moment_at<T: Real, S: Scene, const N: usize, const D: usize>(
     // matrix rows alone, and the axial force without its tangent. Bit-identical to taking
     // row 3 of the full element residual.
     const ROW: usize = 3;
-    let b = &model.sys.beam;
+    // Element 0's own matrices and applied force: the paper's uniform beam and its weight, or
+    // a real arm's first section with its point masses and line load (`crate::loads`).
+    let g_eff = model.params().gravity + base_accel;
+    let (b, applied) = model.sys.element_and_force(0, g_eff);
     let (u, v, a) = (gather(q, 0), gather(v, 0), gather(a, 0));
     let at = |x: &ElementVector<T>| x.get(ROW).copied().unwrap_or(T::zero());
-    let g_eff = model.params().gravity + base_accel;
     let r = row_times(&b.mass, ROW, &a)
         + row_times(&b.stiffness, ROW, &(u + v * b.damping))
         + at(&b.quadrature.force(&u))
-        - at(&b.element.gravity_force(g_eff));
+        - at(&applied);
     -r
 }
 

@@ -95,6 +95,31 @@ pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
             a.ratio
         );
     }
+    if s.file.arm.is_some() {
+        // A real arm: the ball this scale would need, and whether it fits in a signal head.
+        let t = crate::tune::arm_track_radius(&s, a.ratio)?;
+        if a.json {
+            println!("{}", serde_json::to_string(&t)?);
+        } else {
+            println!("{}", describe(&s));
+            println!(
+                "arm first frequency        {:.4} Hz (full solver, 16 elements)",
+                t.arm_frequency
+            );
+            println!(
+                "ball at {:.3} x f1          {:.4} Hz needs track radius R = {:.3} m (ρ = {:.3} m)",
+                a.ratio, t.ball_frequency, t.track_radius, t.path_radius
+            );
+            if !t.buildable_in_signal_head {
+                println!(
+                    "NOT BUILDABLE in a signal head: the track needs {:.2} m of free space, a head offers about {:.2} m",
+                    2.0 * t.track_radius,
+                    crate::tune::SIGNAL_HEAD_SPACE
+                );
+            }
+        }
+        return Ok(());
+    }
     // The output directory is checked (and locked) before the computation.
     let out = match &a.write {
         Some(path) => {

@@ -4,6 +4,7 @@
 
 mod calibrate;
 mod docs;
+mod estimate;
 mod fatigue;
 mod info;
 mod run;
@@ -40,6 +41,7 @@ pub fn dispatch(cli: Cli) -> Result<()> {
         Command::Calibrate(a) => calibrate::calibrate(&a),
         Command::Identify(a) => calibrate::identify(&a),
         Command::Validation(a) => docs::validation(&a),
+        Command::Estimate(a) => estimate::run(&a),
     }
 }
 

@@ -50,6 +50,7 @@ mod sparse;
 
 use crate::sim::{Observation, Simulator};
 use absorber_core::ancf::{Element, ElementMatrix, ElementVector};
+use absorber_core::loads::{arm_section, ArmParams, Section};
 use absorber_core::tip::Chain;
 use absorber_core::{Contact, Energies, Error, Impact, ImpactModel, Params, Side, StepReport};
 use kin::{Bodies, Cons, Mode, MC, NW, PHI, PSI, RB1, RB2, RT1, RT2};
@@ -175,6 +176,12 @@ pub struct FullSolver {
     element: Element<f64>,
     me: ElementMatrix<f64>,
     kb: ElementMatrix<f64>,
+    /// A real arm's per-element sections (the core's [`absorber_core::loads::arm_section`]);
+    /// `None`: the uniform beam above.
+    arm: Option<Arc<[Section<f64>]>>,
+    /// External loads held for the next steps: tip force \[N\] and line load per element
+    /// \[N/m\], positive up (`None`: none).
+    loads: Option<(f64, Arc<[f64]>)>,
     bodies: Bodies,
     n_body: usize,
     nz: usize,
@@ -193,6 +200,8 @@ impl Clone for FullSolver {
             element: self.element,
             me: self.me,
             kb: self.kb,
+            arm: self.arm.clone(),
+            loads: self.loads.clone(),
             bodies: self.bodies,
             n_body: self.n_body,
             nz: self.nz,
@@ -300,7 +309,7 @@ impl FullSolver {
             theta_ref: 0.0,
         };
         let me = element.blended_mass_matrix(params.calibration.mass_lumping);
-        let mass = Self::mass_factor(n, n_body, &me, &bodies)?;
+        let mass = Self::mass_factor(n, n_body, |_| &me, &bodies)?;
         Ok(Self {
             params,
             scene,
@@ -308,6 +317,8 @@ impl FullSolver {
             element,
             me,
             kb: element.bending_stiffness(),
+            arm: None,
+            loads: None,
             bodies,
             n_body,
             nz,
@@ -320,13 +331,89 @@ impl FullSolver {
         })
     }
 
+    /// The solver of a real arm: `arm`'s sections (the core's
+    /// [`absorber_core::loads::arm_section`], one source of truth) replace the uniform beam of
+    /// `params.beam` (whose length and modulus are used); no static solve (see
+    /// [`FullSolver::arm_at_rest`]).
+    pub fn with_arm(
+        params: Params<f64>,
+        scene: SceneKind,
+        n_elements: usize,
+        arm: &ArmParams<f64>,
+    ) -> Result<Self, Error> {
+        arm.validate(&params.beam)?;
+        let mut s = Self::new(params, scene, n_elements)?;
+        let p = &s.params;
+        let sections: Vec<Section<f64>> = (0..n_elements)
+            .map(|k| {
+                arm_section(
+                    arm,
+                    &p.beam,
+                    &p.calibration,
+                    p.damping.stiffness_proportional,
+                    k,
+                    n_elements,
+                )
+            })
+            .collect();
+        let mass = Self::mass_factor(n_elements, s.n_body, |e| &sections[e].beam.mass, &s.bodies)?;
+        s.arm = Some(sections.into());
+        *lock(&s.work) = Work {
+            mass,
+            reduced: [None, None],
+        };
+        Ok(s)
+    }
+
+    /// [`FullSolver::with_arm`], the static equilibrium and a start at rest.
+    pub fn arm_at_rest(
+        params: Params<f64>,
+        scene: SceneKind,
+        n_elements: usize,
+        arm: &ArmParams<f64>,
+        base_accel: f64,
+    ) -> Result<Self, Error> {
+        let mut s = Self::with_arm(params, scene, n_elements, arm)?;
+        s.solve_static()?;
+        s.restart(base_accel)?;
+        Ok(s)
+    }
+
+    /// Holds the external loads for the next steps: `tip_force` \[N\] at the beam end and
+    /// `line_load` \[N/m\] on each element (its length must be the number of elements),
+    /// positive up; the same load integrals as the core ([`Element::line_load_force`]).
+    pub fn set_loads(&mut self, tip_force: f64, line_load: &[f64]) -> Result<(), Error> {
+        if line_load.len() != self.n {
+            return Err(Error::InvalidParameter {
+                field: "loads.line_load",
+                reason: "needs one value per element",
+            });
+        }
+        if !tip_force.is_finite() || !line_load.iter().all(|w| w.is_finite()) {
+            return Err(Error::NonFiniteInput);
+        }
+        self.loads = Some((tip_force, line_load.into()));
+        Ok(())
+    }
+
+    /// Element `e`'s properties, mass and bending stiffness matrices.
+    fn element_of(&self, e: usize) -> (&Element<f64>, &ElementMatrix<f64>, &ElementMatrix<f64>) {
+        match &self.arm {
+            Some(sec) => {
+                let b = &sec[e].beam;
+                (&b.element, &b.mass, &b.stiffness)
+            }
+            None => (&self.element, &self.me, &self.kb),
+        }
+    }
+
     /// Assembles and factors the free-coordinate mass matrix `M_f` (consistent beam mass of
     /// nodes 1..N, `diag(m_t, m_t, J_t, J_b, m_b, m_b)`), and solves it for the unit vectors of
     /// the local coordinates (end node, bodies).
-    fn mass_factor(
+    fn mass_factor<'m>(
         n: usize,
         n_body: usize,
-        me: &ElementMatrix<f64>,
+        me_of: impl Fn(usize) -> &'m ElementMatrix<f64>,
         bodies: &Bodies,
     ) -> Result<MassFactor, Error> {
         let nf = 4 * n + n_body;
@@ -344,6 +431,7 @@ impl FullSolver {
         let pattern = Pattern::new(nf, beam.chain(diag), ORDER).ok_or(Error::Singular)?;
         let mut lu = Lu::new(Arc::new(pattern));
         for e in 0..n {
+            let me = me_of(e);
             for i in 0..8 {
                 for j in 0..8 {
                     if let (Some(a), Some(b)) =
@@ -703,6 +791,10 @@ impl FullSolver {
         f.fill(0.0);
         let weight = self.element.gravity_force(g_eff);
         let damp = self.params.damping.stiffness_proportional;
+        let (tip_force, line) = match &self.loads {
+            Some((p, w)) => (*p, Some(w)),
+            None => (0.0, None),
+        };
         let zval = |i: usize, x: &[f64]| if i < 4 { 0.0 } else { x[i - 4] };
         for e in 0..n {
             let mut u = ElementVector::<f64>::zeros();
@@ -711,15 +803,23 @@ impl FullSolver {
                 u[i] = zval(4 * e + i, qi);
                 ud[i] = zval(4 * e + i, vi);
             }
-            let (ql, kl) = self.element.axial_force_and_tangent(&u);
-            let fe = weight - self.kb * (u + ud * damp) - ql;
+            let (element, me, kb) = self.element_of(e);
+            let (ql, kl) = element.axial_force_and_tangent(&u);
+            let mut applied = match &self.arm {
+                Some(sec) => sec[e].weight(g_eff),
+                None => weight,
+            };
+            if let Some(w) = line {
+                applied += element.line_load_force(w[e]);
+            }
+            let fe = applied - kb * (u + ud * damp) - ql;
             for i in 0..8 {
                 if let Some(fi) = (4 * e + i).checked_sub(4) {
                     f[fi] += fe[i];
                 }
             }
             if let Some((jb, c)) = jac.as_mut() {
-                let je = self.me * c.c_m + self.kb * (c.c_q + c.c_v * damp) + kl * c.c_q;
+                let je = me * c.c_m + kb * (c.c_q + c.c_v * damp) + kl * c.c_q;
                 for i in 0..8 {
                     let Some(gi) = (4 * e + i).checked_sub(4) else {
                         continue;
@@ -735,6 +835,9 @@ impl FullSolver {
         }
         let b0 = self.b0();
         let (mt, mb) = self.bodies.weights;
+        if tip_force != 0.0 {
+            f[4 * n - 3] += tip_force;
+        }
         if self.n_body >= 3 {
             f[self.zloc(RT2) - 4] -= mt * g_eff;
         }
@@ -793,10 +896,11 @@ impl FullSolver {
         }
         let mut my = vec![0.0; nz];
         for e in 0..n {
+            let me = self.element_of(e).1;
             for i in 0..8 {
                 let mut s = 0.0;
                 for j in 0..8 {
-                    s += self.me[(i, j)] * y[4 * e + j];
+                    s += me[(i, j)] * y[4 * e + j];
                 }
                 my[4 * e + i] += s;
             }

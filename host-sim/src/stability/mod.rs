@@ -1111,6 +1111,14 @@ pub fn matrix(length: Length) -> Vec<Case> {
         note: "",
         known_issue: None,
     });
+    for c in cases.iter_mut() {
+        if c.name == "amplitude 50 mm at 4.13 Hz" && c.engine == C32 {
+            c.known_issue = Some(
+                "ball flight in f32 at 3.4 g (tip rotations near 1 rad): the step after a landing \
+                 diverges at 1.53 s; f64 and the ball held on the track (ball.flight = false) run",
+            );
+        }
+    }
     cases
 }
 

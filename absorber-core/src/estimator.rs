@@ -1,0 +1,282 @@
+//! State estimation from a tip accelerometer: the root stress of an arm where no gauge is.
+//!
+//! **Design: the nonlinear model as predictor, a constant (steady-state) Kalman gain.** Each
+//! sample the model takes one step ([`crate::Model::step_with_loads`]) under the base
+//! acceleration and the *estimated* tip load; the innovation `ν = y − (ä_tip + ÿ_b + b̂)`
+//! (measured minus predicted absolute tip acceleration, with the estimated sensor bias b̂)
+//! then corrects every state entry, the load and the bias by a constant gain:
+//! `x⁺ = x⁻ + K ν`. The gain is the steady-state Kalman gain of the model linearized about its
+//! static state — the discrete step map itself, `x_k = F x_{k−1} + G P_k` with the state
+//! `x = (q, q̇, q̈, a)` of the Newmark / generalized-α recursion — augmented with the unknown
+//! tip load P (first-order Gauss–Markov, `P_k = φ P_{k−1} + η`, increment variance `q_P` per
+//! sample: a random walk that forgets over a time constant τ) and the sensor bias (random
+//! walk, `q_b`), and computed on the host (`host_sim::estimate::design`), where the Riccati
+//! equation is iterated to convergence in `f64`.
+//!
+//! Why this and not an extended Kalman filter: the arm's response is linear to within its
+//! static sag (the gain computed about the static state stays valid, the nonlinear predictor
+//! keeps the geometric and gravity terms exact), and the per-sample cost is one model step plus
+//! `4D + 2` multiply-adds. An EKF would propagate a `(4D + 2)²` covariance each sample — for
+//! `D = 12` some 10⁵ flops, several times the model step on a Cortex-M4F — for a gain that,
+//! in this almost linear regime, converges to this one.
+//!
+//! **Outputs** ([`Estimate`]): the model's state (tip deflection), the root moment and stress
+//! ([`crate::monitor::stress`], clamp reaction) with the steady-state standard deviation of
+//! the stress from the Riccati solution, the estimated load and bias. The *mean and static*
+//! stress are not observable from accelerations (a constant load gives no acceleration): the
+//! estimate carries the model's static state under gravity, and a steady load is seen only as
+//! far as the random-walk load model lets its slow part through (see `docs/monitoring.md`).
+//!
+//! Bounded work: one model step and a fixed number of operations; errors are values and leave
+//! the estimator's state unchanged.
+
+use crate::error::Error;
+use crate::loads::{Loads, MAX_LOAD};
+use crate::model::{Model, State, StepReport};
+use crate::monitor::stress::{root_reaction_moment, RootSection};
+use crate::scalar::{is_positive, lit, Real};
+use crate::scene::Scene;
+use nalgebra::SVector;
+
+/// The constant gain of an [`Estimator`] and the steady-state uncertainty it implies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gain<T, const D: usize> {
+    /// Gain on the positions q \[m or 1 per m/s²\].
+    pub q: SVector<T, D>,
+    /// Gain on the velocities.
+    pub v: SVector<T, D>,
+    /// Gain on the accelerations.
+    pub a: SVector<T, D>,
+    /// Gain on the generalized-α variable (zero for Newmark).
+    pub pseudo_accel: SVector<T, D>,
+    /// Gain on the tip load \[N per m/s²\].
+    pub load: T,
+    /// Decay of the tip load per sample, `φ = exp(−h/τ)` \[-\]: the load model is a
+    /// first-order Gauss–Markov process `P_k = φ P_{k−1} + η_k` (a pure random walk, φ = 1,
+    /// would make the steady load undetectable from accelerations and the Riccati equation
+    /// without a steady state).
+    pub load_decay: T,
+    /// Gain on the sensor bias \[-\].
+    pub bias: T,
+    /// Steady-state standard deviation of the root stress estimate \[Pa\].
+    pub stress_sd: T,
+    /// Steady-state standard deviation of the load estimate \[N\].
+    pub load_sd: T,
+}
+
+impl<T: Real, const D: usize> Gain<T, D> {
+    /// Converts the gain (designed in `f64`) to another scalar.
+    pub fn cast<U: Real>(&self) -> Gain<U, D> {
+        let c = |x: T| -> U { lit(crate::scalar::to_f64(x)) };
+        Gain {
+            q: self.q.map(c),
+            v: self.v.map(c),
+            a: self.a.map(c),
+            pseudo_accel: self.pseudo_accel.map(c),
+            load: c(self.load),
+            load_decay: c(self.load_decay),
+            bias: c(self.bias),
+            stress_sd: c(self.stress_sd),
+            load_sd: c(self.load_sd),
+        }
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        let vectors = [&self.q, &self.v, &self.a, &self.pseudo_accel];
+        let finite = vectors
+            .iter()
+            .all(|x| x.as_slice().iter().all(|z| z.is_finite()))
+            && [
+                self.load,
+                self.load_decay,
+                self.bias,
+                self.stress_sd,
+                self.load_sd,
+            ]
+            .iter()
+            .all(|z| z.is_finite());
+        if !finite {
+            return Err(Error::InvalidParameter {
+                field: "estimator.gain",
+                reason: "must be finite",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// What the estimator says after a sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate<T> {
+    /// Tip deflection relative to the base \[m\].
+    pub tip_deflection: T,
+    /// Root bending moment, sagging positive \[N·m\].
+    pub root_moment: T,
+    /// Root stress at the top fibre, tension positive \[Pa\].
+    pub root_stress: T,
+    /// Its standard deviation (steady state of the filter) \[Pa\].
+    pub root_stress_sd: T,
+    /// Estimated vertical tip load, positive up \[N\].
+    pub load: T,
+    /// Its standard deviation \[N\].
+    pub load_sd: T,
+    /// Estimated sensor bias \[m/s²\].
+    pub bias: T,
+    /// Innovation: measured minus predicted tip acceleration \[m/s²\].
+    pub innovation: T,
+    /// The sample was beyond the sensor's range: predicted only, not corrected.
+    pub clipped: bool,
+    /// The model step's report.
+    pub report: StepReport<T>,
+}
+
+/// The estimator: a model of a scene with loads ([`crate::scene::Loaded`] or
+/// [`crate::scene::Arm`]) and a constant gain (module doc).
+#[derive(Clone, Debug)]
+pub struct Estimator<T: Real, S: Scene, const N: usize, const D: usize> {
+    model: Model<T, S, N, D>,
+    gain: Gain<T, D>,
+    section: RootSection<T>,
+    load: T,
+    bias: T,
+    /// Largest |measured acceleration| the sensor reads \[m/s²\] (its range).
+    range: T,
+    max_load: T,
+}
+
+impl<T: Real, S: Scene, const N: usize, const D: usize> Estimator<T, S, N, D> {
+    /// Row of the end node's vertical coordinate.
+    const TIP: usize = 4 * N - 3;
+
+    /// The estimator of `model` (at its start state) with `gain`, the root `section`, and a
+    /// sensor of range ±`range` \[m/s²\]. The scene must have loads.
+    pub fn new(
+        mut model: Model<T, S, N, D>,
+        gain: Gain<T, D>,
+        section: RootSection<T>,
+        range: T,
+    ) -> Result<Self, Error> {
+        gain.check()?;
+        if !is_positive(range) || !range.is_finite() {
+            return Err(Error::InvalidParameter {
+                field: "estimator.range",
+                reason: "must be finite and positive",
+            });
+        }
+        model.set_loads(&Loads::zero())?;
+        Ok(Self {
+            model,
+            gain,
+            section,
+            load: T::zero(),
+            bias: T::zero(),
+            range,
+            max_load: lit(MAX_LOAD),
+        })
+    }
+
+    /// The model (its state is the state estimate).
+    pub fn model(&self) -> &Model<T, S, N, D> {
+        &self.model
+    }
+
+    /// The gain.
+    pub fn gain(&self) -> &Gain<T, D> {
+        &self.gain
+    }
+
+    /// The estimated tip load \[N\].
+    pub fn load(&self) -> T {
+        self.load
+    }
+
+    /// The estimated sensor bias \[m/s²\].
+    pub fn bias(&self) -> T {
+        self.bias
+    }
+
+    /// Root stress of the current state estimate \[Pa\].
+    pub fn root_stress(&self) -> T {
+        self.section
+            .stress_of_moment(root_reaction_moment(&self.model))
+    }
+
+    /// Absolute vertical tip acceleration the model predicts plus the estimated bias \[m/s²\].
+    pub fn predicted_measurement(&self, base_accel: T) -> T {
+        let a = self.model.state().a.get(Self::TIP).copied();
+        a.unwrap_or(T::zero()) + base_accel + self.bias
+    }
+
+    /// Sets the bias estimate to the measured minus the predicted tip acceleration of the
+    /// current state (`tip_accel − ä_tip − ÿ_b`): the zero-g calibration at installation, with
+    /// the arm at rest. Without it the bias state learns the offset over its own time constant
+    /// (the gain's `bias`), and an offset of many noise σ drives the load estimate meanwhile.
+    pub fn initialize_bias(&mut self, base_accel: T, tip_accel: T) -> Result<(), Error> {
+        if !tip_accel.is_finite() || !base_accel.is_finite() {
+            return Err(Error::NonFiniteInput);
+        }
+        self.bias = T::zero();
+        self.bias = tip_accel - self.predicted_measurement(base_accel);
+        Ok(())
+    }
+
+    /// One sample: the base acceleration `base_accel` and the measured vertical tip
+    /// acceleration `tip_accel` \[m/s²\], both at the end of the step. Errors (non-finite
+    /// input, failed step, a correction that would leave the physical range) leave the
+    /// estimator unchanged.
+    pub fn update(&mut self, base_accel: T, tip_accel: T) -> Result<Estimate<T>, Error> {
+        if !tip_accel.is_finite() {
+            return Err(Error::NonFiniteInput);
+        }
+        let before = (*self.model.state(), self.load, self.bias);
+        let prior = self.gain.load_decay * self.load;
+        let loads = Loads {
+            tip_force: prior,
+            line_load: [T::zero(); N],
+        };
+        let report = self.model.step_with_loads(base_accel, &loads)?;
+        let clipped = tip_accel.abs() >= self.range;
+        let innovation = if clipped {
+            T::zero()
+        } else {
+            tip_accel - self.predicted_measurement(base_accel)
+        };
+        let mut s: State<T, D> = *self.model.state();
+        let g = &self.gain;
+        s.q += g.q * innovation;
+        s.v += g.v * innovation;
+        s.a += g.a * innovation;
+        s.pseudo_accel += g.pseudo_accel * innovation;
+        let load = prior + g.load * innovation;
+        let bias = self.bias + g.bias * innovation;
+        let finite =
+            s.q.iter()
+                .chain(s.v.iter())
+                .chain(s.a.iter())
+                .all(|z| z.is_finite());
+        if !finite || !load.is_finite() || load.abs() > self.max_load || !bias.is_finite() {
+            self.model.set_state(before.0);
+            let _ = self.model.set_loads(&Loads {
+                tip_force: before.1,
+                line_load: [T::zero(); N],
+            });
+            return Err(Error::NonFiniteState);
+        }
+        self.model.set_state(s);
+        self.load = load;
+        self.bias = bias;
+        let moment = root_reaction_moment(&self.model);
+        Ok(Estimate {
+            tip_deflection: self.model.tip_deflection(),
+            root_moment: moment,
+            root_stress: self.section.stress_of_moment(moment),
+            root_stress_sd: self.gain.stress_sd,
+            load,
+            load_sd: self.gain.load_sd,
+            bias,
+            innovation,
+            clipped,
+            report,
+        })
+    }
+}

@@ -1,0 +1,171 @@
+//! `host-sim estimate`: the twin experiment of the root-stress estimator
+//! ([`crate::estimate::twin`]).
+
+use crate::cli::EstimateArgs;
+use crate::estimate::{twin, TwinReport, TwinSeries};
+use crate::output::{OutputDir, Status};
+use crate::plot::{render, Panel, Series};
+use crate::scene::Scene;
+use anyhow::{bail, Result};
+
+/// Runs the command.
+pub fn run(a: &EstimateArgs) -> Result<()> {
+    let scene = Scene::load(&a.scene)?;
+    if !(a.load_step.is_finite() && a.load_step > 0.0) {
+        bail!(
+            "invalid value for `--load-step`: {} (must be finite and positive)",
+            a.load_step
+        );
+    }
+    let duration = a.duration.unwrap_or(scene.file.duration);
+    let mut out = match &a.out {
+        Some(dir) => Some(OutputDir::open(dir, Some("estimate"), "estimate")?),
+        None => None,
+    };
+    if !(a.load_time.is_finite() && a.load_time > 0.0) {
+        bail!(
+            "invalid value for `--load-time`: {} (must be finite and positive)",
+            a.load_time
+        );
+    }
+    let (report, series) = twin(&scene, duration, a.load_step, a.load_time)?;
+    if let Some(dir) = out.as_mut() {
+        write_files(dir, &report, &series)?;
+    }
+    if let Some(dir) = out {
+        dir.commit(Status::Complete, serde_json::to_value(&report)?)?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string(&report)?);
+        return Ok(());
+    }
+    let r = &report;
+    println!(
+        "twin: truth = full solver, 16 elements, f64; estimate = core, 3 elements, f32 (E·I × {:.4}: f1 {:.4} Hz as the truth's {:.4} Hz)",
+        r.bending_factor, r.frequencies.1, r.frequencies.0
+    );
+    println!(
+        "sensor noise σ {:.2e} m/s²; {} samples, {} clipped, {} failed",
+        r.noise.measurement, r.samples, r.clipped, r.failed
+    );
+    println!(
+        "root stress: true RMS about the mean {:.3} MPa, mean true {:.2} / estimated {:.2} MPa",
+        r.true_stress_rms_mpa, r.mean_stress_mpa.0, r.mean_stress_mpa.1
+    );
+    println!(
+        "static stress under gravity: truth {:.2} MPa, estimator's model {:.2} MPa",
+        r.static_stress_mpa.0, r.static_stress_mpa.1
+    );
+    println!(
+        "RMS error of the dynamic stress {:.2} % of the true RMS ({:.2} % with the static difference); filter sd {:.3} MPa, {:.1} % of samples within ±2 sd",
+        r.stress_rms_error_pct,
+        r.stress_rms_error_total_pct,
+        r.stress_sd_mpa,
+        100.0 * r.within_two_sd
+    );
+    println!(
+        "Miner damage (category {}, no threshold): true {:.3e}, estimated {:.3e}, ratio {:.3}; with the CAFT cutoff: ratio {:.3}",
+        r.category, r.damage_true, r.damage_estimated, r.damage_ratio, r.damage_ratio_cutoff
+    );
+    println!(
+        "stress-range histogram (cycles per {} MPa bin):",
+        r.histogram.bin_mpa
+    );
+    println!("  range MPa      true  estimated");
+    for (i, (t, e)) in r
+        .histogram
+        .truth
+        .iter()
+        .zip(&r.histogram.estimate)
+        .enumerate()
+    {
+        if *t > 0.0 || *e > 0.0 {
+            println!(
+                "  {:>4}–{:<4} {:>9.1} {:>10.1}",
+                i as f64 * r.histogram.bin_mpa,
+                (i + 1) as f64 * r.histogram.bin_mpa,
+                t,
+                e
+            );
+        }
+    }
+    Ok(())
+}
+
+fn write_files(dir: &mut OutputDir, r: &TwinReport, s: &TwinSeries) -> Result<()> {
+    let mut csv = String::from(
+        "# host-sim estimate: t [s], true and estimated root stress [Pa], measured tip acceleration [m/s^2], estimated tip load [N]\n\
+         t,stress_true,stress_estimated,tip_accel_measured,load_estimated\n",
+    );
+    for i in 0..s.time.len() {
+        csv.push_str(&format!(
+            "{:.3},{:.6e},{:.6e},{:.6e},{:.6e}\n",
+            s.time[i], s.truth[i], s.estimate[i], s.measured[i], s.load[i]
+        ));
+    }
+    dir.write("estimate.csv", &csv)?;
+    dir.write("estimate.json", &serde_json::to_string_pretty(r)?)?;
+    let mpa = |v: &[f64]| -> Vec<(f64, f64)> {
+        s.time.iter().zip(v).map(|(t, x)| (*t, x / 1e6)).collect()
+    };
+    // The whole run, and a 20 s window in the middle of it.
+    let t_end = s.time.last().copied().unwrap_or(0.0);
+    let (w0, w1) = (0.5 * t_end - 10.0, 0.5 * t_end + 10.0);
+    let window = |v: &[f64]| -> Vec<(f64, f64)> {
+        mpa(v)
+            .into_iter()
+            .filter(|(t, _)| *t >= w0 && *t <= w1)
+            .collect()
+    };
+    let panels = [
+        Panel::new(
+            "root stress, whole run",
+            "t [s]",
+            "stress [MPa]",
+            vec![
+                Series::line("truth (full solver, N = 16)", mpa(&s.truth)).colored(0),
+                Series::line("estimate (core, N = 3, f32)", mpa(&s.estimate)).colored(1),
+            ],
+        ),
+        Panel::new(
+            "root stress, 20 s window",
+            "t [s]",
+            "stress [MPa]",
+            vec![
+                Series::line("truth", window(&s.truth)).colored(0),
+                Series::line("estimate", window(&s.estimate)).colored(1),
+            ],
+        ),
+    ];
+    dir.write_with("estimate_stress.png", |p| {
+        render(
+            p,
+            "root stress: truth and estimate from the tip accelerometer",
+            &panels,
+            2,
+            1,
+            (1200, 900),
+        )
+    })?;
+    let h = &r.histogram;
+    let bars = |v: &[f64]| -> Vec<(f64, f64)> {
+        v.iter()
+            .enumerate()
+            .filter(|(_, c)| **c > 0.0)
+            .map(|(i, c)| ((i as f64 + 0.5) * h.bin_mpa, c.log10()))
+            .collect()
+    };
+    let hist = [Panel::new(
+        "rainflow stress ranges",
+        "range [MPa]",
+        "log10 cycles per bin",
+        vec![
+            Series::marked("truth", bars(&h.truth)).colored(0),
+            Series::marked("estimate", bars(&h.estimate)).colored(1),
+        ],
+    )];
+    dir.write_with("estimate_histogram.png", |p| {
+        render(p, "stress-range histogram", &hist, 1, 1, (900, 600))
+    })?;
+    Ok(())
+}
