@@ -160,6 +160,9 @@ struct Work {
     /// Reduced Newton matrix, one per partition: `[4N unknowns, 4N + 1 (free ball on the
     /// track), 4N + 3 (ball in flight)]`.
     reduced: [Option<Lu>; 3],
+    /// Diagnostics of the last step: the largest radial distance `|r − ρ|` by which a landing
+    /// put the ball's centre onto its circle \[m\] (the landing's position error).
+    projection: f64,
 }
 
 use absorber_core::model::{DAMPING_TRIALS, END_BEYOND_STOP, MAX_STEP, START_BEYOND_STOP};
@@ -324,6 +327,7 @@ impl FullSolver {
             work: Mutex::new(Work {
                 mass,
                 reduced: [None, None, None],
+                projection: 0.0,
             }),
         })
     }
@@ -921,7 +925,7 @@ impl FullSolver {
             None
         };
         let mut guard = lock(&self.work);
-        let Work { mass, reduced } = &mut *guard;
+        let Work { mass, reduced, .. } = &mut *guard;
         let lu = self.reduced_lu(reduced, ni)?;
         let mut factored = false;
         let mut refresh = false;
@@ -1382,6 +1386,7 @@ impl FullSolver {
         }
         let h = self.params.integrator.step;
         let start = self.state.clone();
+        lock(&self.work).projection = 0.0;
         let (trial, solved) = self.newmark(&start, h, base_accel)?;
         let mut report = StepReport {
             iterations: solved.iterations,
@@ -1597,7 +1602,7 @@ impl FullSolver {
             let mut y = grad.clone();
             {
                 let mut guard = lock(&self.work);
-                let Work { mass, reduced } = &mut *guard;
+                let Work { mass, reduced, .. } = &mut *guard;
                 let lu = self.reduced_lu(reduced, ni)?;
                 self.evaluate(
                     mass,
@@ -1665,7 +1670,7 @@ impl FullSolver {
         let g = self.params.gravity;
         let mut warm = self.local_of(&s.q);
         let mut guard = lock(&self.work);
-        let Work { mass, reduced } = &mut *guard;
+        let Work { mass, reduced, .. } = &mut *guard;
         let lu = self.reduced_lu(reduced, qi.len())?;
         let mut derivative = |ch: Chain<f64>| {
             self.evaluate(
@@ -1850,7 +1855,12 @@ mod tests {
     fn residual_routes_agree_and_newton_matrix_is_derivative() {
         let mut s = FullSolver::new(Params::default(), SceneKind::FreeBall, 2).expect("valid");
         s.solve_static().expect("static");
-        let mode = Mode::Free;
+        newton_matrix_is_derivative(&s, Mode::Free);
+        // In flight (issue 13): the ball's rows are its mass, the rest as on the track.
+        newton_matrix_is_derivative(&s, Mode::Flying);
+    }
+
+    fn newton_matrix_is_derivative(s: &FullSolver, mode: Mode) {
         let ni = s.n_ind(mode);
         let mut qi = s.gather_ind(&s.equilibrium.q, mode);
         let mut vi = vec![0.0; ni];
@@ -1869,8 +1879,9 @@ mod tests {
         };
         let mut warm = s.local_of(&s.equilibrium.q);
         let mut guard = lock(&s.work);
-        let Work { mass, reduced } = &mut *guard;
+        let Work { mass, reduced, .. } = &mut *guard;
         let lu = s.reduced_lu(reduced, ni).expect("pattern");
+        assert_eq!(lu.n(), ni);
         s.evaluate(
             mass,
             Some((&mut *lu, &ch)),
