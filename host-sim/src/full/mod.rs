@@ -40,6 +40,13 @@
 //! solve; a reused factorization must halve the scaled correction of the previous iteration, else
 //! the correction is discarded and the matrix is rebuilt at the same iterate (the core's rule).
 //!
+//! **Ball flight** (issue 13, `flight.rs`): with `ball.flight` a free ball leaves the track where
+//! the track would have to pull it, and the partition changes: the rolling contact (`c₄`, `c₅`)
+//! is released and the ball's `(φ, R_b1, R_b2)` become independent coordinates (`4N + 3`, a third
+//! reduced Newton matrix: the beam's band plus the ball's diagonal masses). Landings (bounce or
+//! plastic rough landing by momentum projection onto the rolling partition) and stops in flight
+//! follow the same law as the core (`absorber_core::flight`).
+//!
 //! Stops, stick and release, impulses: the core's algorithm (`absorber_core::stops`), with the
 //! relative angle `α = θ − ψ` and its gradient computed from the maximal coordinates. Newton:
 //! the core's rule (`absorber_core::newton`) for step solves — one matrix per solve, reused while
