@@ -117,9 +117,11 @@ pub struct FullState {
     pub time: f64,
     /// Base acceleration input at `time` \[m/s²\].
     pub base_accel: f64,
-    /// Stop contact.
+    /// The ball's phase: on the track (`Off`, or resting on a stop) or in flight (`InFlight`:
+    /// its `(φ, R_b1, R_b2)` are independent coordinates, the rolling contact is released).
     pub contact: Contact,
-    /// Branch of the orbit angle θ (θ is continuous, not wrapped to ±π).
+    /// Branch of the orbit angle θ (θ is continuous, not wrapped to ±π); in flight, of the
+    /// polar angle of the ball's centre about A.
     pub theta_ref: f64,
 }
 
