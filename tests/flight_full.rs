@@ -5,7 +5,6 @@
 
 use absorber_core::Params;
 use host_sim::full::{FullSolver, SceneKind};
-use host_sim::sim::Simulator;
 
 /// Table 1 at 4.10 Hz (N = 3 and 8) and 4.13 Hz (N = 3), 60 s, flight on: every step
 /// converges, and every state is consistent — in flight the ball is inside the housing
