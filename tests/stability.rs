@@ -48,9 +48,7 @@ fn full_and_core_momenta_agree() {
     use absorber_core::{FreeBallModel, Model, Params};
     use host_sim::full::{FullSolver, SceneKind};
     use host_sim::stability::FullProbe;
-    // The ball held on its track in both (the momentum of the rolling model is the subject).
-    let mut p = Params::<f64>::default();
-    p.ball.flight = false;
+    let p = Params::<f64>::default();
     let mut core: FreeBallModel<f64, 3, 13> = Model::at_rest(p, 0.0).unwrap();
     let mut full = FullProbe {
         solver: FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0).unwrap(),

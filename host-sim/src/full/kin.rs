@@ -14,6 +14,9 @@
 //! c₆′  = θ                               (static solve of a free ball: pinned plumb)
 //! ```
 //!
+//! While the ball flies (issue 13, /work/flight-spec.md) only the fixed joint c₁…c₃ is active:
+//! the ball's `(φ, R_b1, R_b2)` are independent coordinates ([`Mode::Flying`]).
+//!
 //! For each one: value, gradient `∂c/∂w` and the quadratic term `ẇᵀ (∂²c/∂w²) ẇ`, so that
 //! `Q_d = −(C_q q̇)_q q̇` (eq. 23; the constraints do not depend on time in the base frame).
 
@@ -33,6 +36,8 @@ pub const RB1: usize = 8;
 pub const RB2: usize = 9;
 /// Most constraints at once.
 pub const MC: usize = 6;
+/// Most independent local coordinates at once (end node, and φ, R_b1, R_b2 in flight).
+pub const NI: usize = 7;
 
 /// Which local constraints are active.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,6 +48,9 @@ pub enum Mode {
     Tip,
     /// Free ball: c₁…c₅; φ is independent.
     Free,
+    /// Ball in flight inside the housing: c₁…c₃ only (the rolling contact c₄, c₅ released);
+    /// φ, R_b1, R_b2 are independent.
+    Flying,
     /// Ball held at relative angle α_lock: c₁…c₆; φ is dependent.
     Held(f64),
     /// Static solve of a free ball: c₁…c₅ and c₆′ (θ = 0, plumb); φ is dependent. The plumb
@@ -56,7 +64,7 @@ impl Mode {
     pub fn m(self) -> usize {
         match self {
             Mode::Beam => 0,
-            Mode::Tip => 3,
+            Mode::Tip | Mode::Flying => 3,
             Mode::Free => 5,
             Mode::Held(_) | Mode::Plumb => 6,
         }
@@ -66,7 +74,7 @@ impl Mode {
     pub fn dependent(self) -> &'static [usize] {
         match self {
             Mode::Beam => &[],
-            Mode::Tip => &[RT1, RT2, PSI],
+            Mode::Tip | Mode::Flying => &[RT1, RT2, PSI],
             Mode::Free => &[RT1, RT2, PSI, RB1, RB2],
             Mode::Held(_) | Mode::Plumb => &[RT1, RT2, PSI, PHI, RB1, RB2],
         }
@@ -76,6 +84,7 @@ impl Mode {
     pub fn independent(self) -> &'static [usize] {
         match self {
             Mode::Free => &[0, 1, 2, 3, PHI],
+            Mode::Flying => &[0, 1, 2, 3, PHI, RB1, RB2],
             _ => &[0, 1, 2, 3],
         }
     }
@@ -162,7 +171,7 @@ impl Bodies {
         c.grad[2][2] = y / r2;
         c.grad[2][3] = -x / r2;
         c.quad[2] = -atan2_quad(x, y, wd[2], wd[3]);
-        if mode == Mode::Tip {
+        if matches!(mode, Mode::Tip | Mode::Flying) {
             return c;
         }
         // Ball: D = R_b − r_A.

@@ -40,11 +40,19 @@
 //! solve; a reused factorization must halve the scaled correction of the previous iteration, else
 //! the correction is discarded and the matrix is rebuilt at the same iterate (the core's rule).
 //!
+//! **Ball flight** (issue 13, `flight.rs`): with `ball.flight` a free ball leaves the track where
+//! the track would have to pull it, and the partition changes: the rolling contact (`c₄`, `c₅`)
+//! is released and the ball's `(φ, R_b1, R_b2)` become independent coordinates (`4N + 3`, a third
+//! reduced Newton matrix: the beam's band plus the ball's diagonal masses). Landings (bounce or
+//! plastic rough landing by momentum projection onto the rolling partition) and stops in flight
+//! follow the same law as the core (`absorber_core::flight`).
+//!
 //! Stops, stick and release, impulses: the core's algorithm (`absorber_core::stops`), with the
 //! relative angle `α = θ − ψ` and its gradient computed from the maximal coordinates. Newton:
 //! the core's rule (`absorber_core::newton`) for step solves — one matrix per solve, reused while
 //! it contracts — and a fresh matrix every iteration for static and acceleration solves.
 
+mod flight;
 pub mod kin;
 mod sparse;
 
@@ -52,8 +60,10 @@ use crate::sim::{Observation, Simulator};
 use absorber_core::ancf::{Element, ElementMatrix, ElementVector};
 use absorber_core::loads::{arm_section, ArmParams, Section};
 use absorber_core::tip::Chain;
-use absorber_core::{Contact, Energies, Error, Impact, ImpactModel, Params, Side, StepReport};
-use kin::{Bodies, Cons, Mode, MC, NW, PHI, PSI, RB1, RB2, RT1, RT2};
+use absorber_core::{
+    Contact, Energies, Error, Impact, ImpactModel, Landing, Params, Side, StepReport,
+};
+use kin::{Bodies, Cons, Mode, MC, NI, NW, PHI, PSI, RB1, RB2, RT1, RT2};
 use nalgebra::{Const, DMatrix, SMatrix, SVector, LU};
 use sparse::{Lu, Order, Pattern};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -108,9 +118,11 @@ pub struct FullState {
     pub time: f64,
     /// Base acceleration input at `time` \[m/s²\].
     pub base_accel: f64,
-    /// Stop contact.
+    /// The ball's phase: on the track (`Off`, or resting on a stop) or in flight (`InFlight`:
+    /// its `(φ, R_b1, R_b2)` are independent coordinates, the rolling contact is released).
     pub contact: Contact,
-    /// Branch of the orbit angle θ (θ is continuous, not wrapped to ±π).
+    /// Branch of the orbit angle θ (θ is continuous, not wrapped to ±π); in flight, of the
+    /// polar angle of the ball's centre about A.
     pub theta_ref: f64,
 }
 
@@ -129,7 +141,7 @@ struct Kin {
     wd: [f64; NW],
     cons: Cons,
     lu_dep: LU<f64, Const<MC>, Const<MC>>,
-    bd: [[f64; 5]; MC],
+    bd: [[f64; NI]; MC],
 }
 
 struct Evaluated {
@@ -155,8 +167,12 @@ struct MassFactor {
 #[derive(Clone, Debug)]
 struct Work {
     mass: MassFactor,
-    /// Reduced Newton matrix, one per partition: `[4N unknowns, 4N + 1 (free ball)]`.
-    reduced: [Option<Lu>; 2],
+    /// Reduced Newton matrix, one per partition: `[4N unknowns, 4N + 1 (free ball on the
+    /// track), 4N + 3 (ball in flight)]`.
+    reduced: [Option<Lu>; 3],
+    /// Diagnostics of the last step: the largest radial distance `|r − ρ|` by which a landing
+    /// put the ball's centre onto its circle \[m\] (the landing's position error).
+    projection: f64,
 }
 
 use absorber_core::model::{DAMPING_TRIALS, END_BEYOND_STOP, MAX_STEP, START_BEYOND_STOP};
@@ -187,6 +203,8 @@ pub struct FullSolver {
     nz: usize,
     state: FullState,
     equilibrium: FullState,
+    /// The landing of the last step (issue 13).
+    last_landing: Option<Landing<f64>>,
     work: Mutex<Work>,
 }
 
@@ -207,6 +225,7 @@ impl Clone for FullSolver {
             nz: self.nz,
             state: self.state.clone(),
             equilibrium: self.equilibrium.clone(),
+            last_landing: self.last_landing,
             work: Mutex::new(work),
         }
     }
@@ -324,9 +343,11 @@ impl FullSolver {
             nz,
             equilibrium: state.clone(),
             state,
+            last_landing: None,
             work: Mutex::new(Work {
                 mass,
-                reduced: [None, None],
+                reduced: [None, None, None],
+                projection: 0.0,
             }),
         })
     }
@@ -360,7 +381,8 @@ impl FullSolver {
         s.arm = Some(sections.into());
         *lock(&s.work) = Work {
             mass,
-            reduced: [None, None],
+            reduced: [None, None, None],
+            projection: 0.0,
         };
         Ok(s)
     }
@@ -485,13 +507,21 @@ impl FullSolver {
     }
 
     /// The reduced Newton matrix for `ni` independent unknowns (pattern and symbolic analysis
-    /// made on first use): element blocks of the free beam coordinates and the local block.
+    /// made on first use): element blocks of the free beam coordinates and the local block —
+    /// dense over the end node and φ on the track; in flight the end node's block and the
+    /// diagonal of the ball's `(φ, R_b1, R_b2)`, whose rows are their masses alone (no
+    /// constraint couples them to the housing), so the band stays that of the beam.
     fn reduced_lu<'w>(
         &self,
-        slots: &'w mut [Option<Lu>; 2],
+        slots: &'w mut [Option<Lu>; 3],
         ni: usize,
     ) -> Result<&'w mut Lu, Error> {
-        let k = usize::from(ni != 4 * self.n);
+        let k = match ni.checked_sub(4 * self.n) {
+            Some(0) => 0,
+            Some(1) => 1,
+            Some(3) => 2,
+            _ => return Err(Error::Singular),
+        };
         let slot = slots.get_mut(k).ok_or(Error::Singular)?;
         if slot.as_ref().map(Lu::n) != Some(ni) {
             let n = self.n;
@@ -506,7 +536,10 @@ impl FullSolver {
                 })
             });
             let nl = ni - loc0;
-            let local = (0..nl * nl).map(|k| (loc0 + k / nl, loc0 + k % nl));
+            let dense = if nl == 7 { 4 } else { nl };
+            let local = (0..dense * dense)
+                .map(move |k| (loc0 + k / dense, loc0 + k % dense))
+                .chain((dense..nl).map(move |k| (loc0 + k, loc0 + k)));
             let pattern = Pattern::new(ni, beam.chain(local), ORDER).ok_or(Error::Singular)?;
             *slot = Some(Lu::new(Arc::new(pattern)));
         }
@@ -556,30 +589,47 @@ impl FullSolver {
                 Contact::OnStop(side) => {
                     Mode::Held(side.sign::<f64>() * self.params.ball.stop_angle)
                 }
-                // (not set by this solver: its ball stays on the track)
-                Contact::InFlight | Contact::Beyond => Mode::Free,
+                Contact::InFlight => Mode::Flying,
+                // (the core's "rolling beyond the stops"; this solver tells it by the angle)
+                Contact::Beyond => Mode::Free,
             },
         }
     }
 
+    /// Number of independent coordinates: the free beam coordinates, φ of a ball on the track
+    /// off the stops, φ and the centre `(R_b1, R_b2)` of a flying ball.
     fn n_ind(&self, mode: Mode) -> usize {
-        4 * self.n + if mode == Mode::Free { 1 } else { 0 }
+        4 * self.n
+            + match mode {
+                Mode::Free => 1,
+                Mode::Flying => 3,
+                _ => 0,
+            }
     }
 
+    /// z index of independent coordinate `i` (beam, then φ, R_b1, R_b2 as the mode has them).
     fn ind_to_z(&self, i: usize) -> usize {
-        if i < 4 * self.n {
-            4 + i
-        } else {
-            self.zloc(PHI)
+        match i.checked_sub(4 * self.n) {
+            None => 4 + i,
+            Some(0) => self.zloc(PHI),
+            Some(1) => self.zloc(RB1),
+            _ => self.zloc(RB2),
         }
     }
 
+    /// Scale of independent coordinate `i` for the convergence test: the beam length for
+    /// positions (nodal positions, the flying ball's centre), 1 otherwise.
     fn scale(&self, i: usize) -> f64 {
-        if i < 4 * self.n && i % 4 < 2 {
-            self.params.beam.length
-        } else {
-            1.0
+        match i.checked_sub(4 * self.n) {
+            None if i % 4 < 2 => self.params.beam.length,
+            Some(1) | Some(2) => self.params.beam.length,
+            _ => 1.0,
         }
+    }
+
+    /// The ball may leave its track in this run: a free-ball scene and `ball.flight`.
+    fn flies(&self) -> bool {
+        self.scene.free_ball() && self.params.ball.flight
     }
 
     fn gather_ind(&self, z: &[f64], mode: Mode) -> Vec<f64> {
@@ -661,7 +711,7 @@ impl FullSolver {
         }
         let c0 = self.bodies.constraints(&w, &zero, mode, theta_ref);
         let lu_dep = build(&c0).lu();
-        let mut bd = [[0.0; 5]; MC];
+        let mut bd = [[0.0; NI]; MC];
         if m > 0 {
             let lu = &lu_dep;
             let mut rhs = SVector::<f64, MC>::zeros();
@@ -731,7 +781,7 @@ impl FullSolver {
         mode: Mode,
         ai: &[f64],
         g_eff: f64,
-    ) -> Result<[f64; 5], Error> {
+    ) -> Result<[f64; NI], Error> {
         let wdd = self.local_accel(kin, mode, ai)?;
         let (mt, mb) = self.bodies.weights;
         let mut gw = [0.0; NW];
@@ -740,7 +790,7 @@ impl FullSolver {
         }
         gw[RT2] += mt * g_eff;
         gw[RB2] += mb * g_eff;
-        let mut r = [0.0; 5];
+        let mut r = [0.0; NI];
         for (k, &jk) in mode.independent().iter().enumerate() {
             r[k] = gw[jk]
                 + mode
@@ -916,15 +966,25 @@ impl FullSolver {
                 .map(|(row, &j)| kin.bd[row][k] * my[self.zloc(j)])
                 .sum::<f64>();
         }
-        // Tip/ball block of the Newton matrix: central differences of the local residual.
+        // Tip/ball block of the Newton matrix: central differences of the local residual. A
+        // flying ball's rows are `m c_m` on its own coordinates (its mass, no constraint):
+        // entered exactly, and the differences cover the end node's columns and rows only.
         if let Some((jb, c)) = jac.as_mut() {
             let nl = mode.independent().len();
+            let coupled = if mode == Mode::Flying {
+                for (k, &j) in mode.independent().iter().enumerate().skip(4) {
+                    jb.add(loc0 + k, loc0 + k, self.bodies.mass[j] * c.c_m);
+                }
+                4
+            } else {
+                nl
+            };
             if m > 0 {
                 let denom = c.c_q.abs() + c.c_v.abs() * 1e-2 + c.c_m.abs() * 1e-4;
-                for k in 0..nl {
+                for k in 0..coupled {
                     let s = if k < 2 { self.params.beam.length } else { 1.0 };
                     let eps = 1e-6 * s / denom;
-                    let mut cols = [[0.0; 5]; 2];
+                    let mut cols = [[0.0; NI]; 2];
                     for (side, sign) in [(0usize, 1.0f64), (1, -1.0)] {
                         let mut q = qi[loc0..].to_vec();
                         let mut v = vi[loc0..].to_vec();
@@ -935,7 +995,9 @@ impl FullSolver {
                         let kp = self.local_kin(mode, &q, &v, &kin.w, theta_ref)?;
                         cols[side] = self.local_residual(&kp, mode, &a, g_eff)?;
                     }
-                    for (row, (p, m)) in cols[0].iter().zip(cols[1].iter()).enumerate().take(nl) {
+                    for (row, (p, m)) in
+                        cols[0].iter().zip(cols[1].iter()).enumerate().take(coupled)
+                    {
                         jb.add(loc0 + row, loc0 + k, (p - m) / (2.0 * eps));
                     }
                 }
@@ -979,7 +1041,7 @@ impl FullSolver {
             None
         };
         let mut guard = lock(&self.work);
-        let Work { mass, reduced } = &mut *guard;
+        let Work { mass, reduced, .. } = &mut *guard;
         let lu = self.reduced_lu(reduced, ni)?;
         let mut factored = false;
         let mut refresh = false;
@@ -1364,38 +1426,15 @@ impl FullSolver {
     }
 
     /// Fraction τ ∈ [0, 1] of the step at which α reaches `target`: root of the cubic Hermite
-    /// interpolant of α through both step ends with their rates (as the core).
+    /// interpolant of α through both step ends with their rates
+    /// ([`absorber_core::flight::hermite_root`], shared with the core).
     fn crossing_fraction(&self, start: &FullState, end: &FullState, h: f64, target: f64) -> f64 {
-        let (a0, a1) = (
+        absorber_core::flight::hermite_root(
             self.relative_angle(start) - target,
+            self.relative_rate(start) * h,
             self.relative_angle(end) - target,
-        );
-        let (d0, d1) = (self.relative_rate(start) * h, self.relative_rate(end) * h);
-        let linear = a0 / (a0 - a1);
-        let mut tau = if linear.is_finite() {
-            linear.clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        for _ in 0..6 {
-            let (t2, t3) = (tau * tau, tau * tau * tau);
-            let p = (2.0 * t3 - 3.0 * t2 + 1.0) * a0
-                + (t3 - 2.0 * t2 + tau) * d0
-                + (3.0 * t2 - 2.0 * t3) * a1
-                + (t3 - t2) * d1;
-            let dp = (6.0 * t2 - 6.0 * tau) * (a0 - a1)
-                + (3.0 * t2 - 4.0 * tau + 1.0) * d0
-                + (3.0 * t2 - 2.0 * tau) * d1;
-            if dp == 0.0 || dp.is_nan() {
-                break;
-            }
-            let next = tau - p / dp;
-            if !next.is_finite() {
-                break;
-            }
-            tau = next.clamp(0.0, 1.0);
-        }
-        tau
+            self.relative_rate(end) * h,
+        )
     }
 
     /// Generalized contact force on the ball along θ in a held state: `−λ` of the lock
@@ -1440,6 +1479,9 @@ impl FullSolver {
             return None;
         }
         let s = &self.state;
+        if s.contact == Contact::InFlight {
+            return Some((0.0, 0.0));
+        }
         let mode = self.mode(s.contact);
         let l = self.multipliers(s).ok()?;
         let lock_term = match mode {
@@ -1460,7 +1502,8 @@ impl FullSolver {
         }
         let h = self.params.integrator.step;
         let start = self.state.clone();
-        let (mut next, solved) = self.newmark(&start, h, base_accel)?;
+        lock(&self.work).projection = 0.0;
+        let (trial, solved) = self.newmark(&start, h, base_accel)?;
         let mut report = StepReport {
             iterations: solved.iterations,
             increment: solved.increment,
@@ -1468,50 +1511,103 @@ impl FullSolver {
             separation: None,
             landing: None,
         };
-        if self.scene.stops() {
-            match next.contact {
-                Contact::Off => {
-                    let alpha1 = self.relative_angle(&next);
-                    if alpha1.abs() > self.params.ball.stop_angle {
-                        next = self.step_with_impact(
-                            &start,
-                            &next,
-                            h,
-                            base_accel,
-                            alpha1,
-                            &mut report,
-                        )?;
-                    }
-                }
-                Contact::OnStop(side) => {
-                    if side.sign::<f64>() * self.contact_force(&next)? > 0.0 {
-                        next.contact = Contact::Off;
-                    }
-                }
-                Contact::InFlight | Contact::Beyond => {}
+        let next = if start.contact == Contact::InFlight {
+            // In flight: a landing or a stop splits the step at the crossing (flight.rs).
+            self.flight_events(&start, trial, base_accel, &mut report)?
+        } else {
+            let next = self.stop_events(&start, trial, h, base_accel, &mut report)?;
+            // Separation: a track that would pull the ball lets it fly.
+            if self.flies() && report.impact.is_none() {
+                self.separation(&start, next, base_accel, &mut report)?
+            } else {
+                next
             }
-        }
+        };
+        self.last_landing = report.landing;
         self.state = next;
         Ok(report)
     }
 
+    /// The stop events of a rolling step from `start` with trial end `next`: an impact when
+    /// the ball crossed a stop (from between the stops, or — with flight, after flying over a
+    /// stop — from the arc beyond it: spec revision 4), a release when a held ball would be
+    /// pulled.
+    fn stop_events(
+        &self,
+        start: &FullState,
+        mut next: FullState,
+        h: f64,
+        base_accel: f64,
+        report: &mut StepReport<f64>,
+    ) -> Result<FullState, Error> {
+        if !self.scene.stops() {
+            return Ok(next);
+        }
+        let stop = self.params.ball.stop_angle;
+        match next.contact {
+            Contact::Off => {
+                if !self.flies() {
+                    if self.relative_angle(&next).abs() > stop {
+                        return self.step_with_impact(start, &next, h, base_accel, true, report);
+                    }
+                    return Ok(next);
+                }
+                let (a0, a1) = self.branch_angles(start, &next);
+                let inside = a0.abs() <= stop + flight::BEYOND_MARGIN;
+                if inside == (a1.abs() <= stop) {
+                    return Ok(next);
+                }
+                self.step_with_impact(start, &next, h, base_accel, inside, report)
+            }
+            Contact::OnStop(side) => {
+                if side.sign::<f64>() * self.contact_force(&next)? > 0.0 {
+                    next.contact = Contact::Off;
+                }
+                Ok(next)
+            }
+            // (Beyond is the core's marker; this solver tells a ball beyond the stops by its
+            // angle, the Off arm above.)
+            Contact::InFlight | Contact::Beyond => Ok(next),
+        }
+    }
+
+    /// Splits a rolling step that crossed a stop (from between the stops, `inside`, or from
+    /// the arc beyond them) at the crossing, applies the impact, and integrates the rest.
     fn step_with_impact(
         &self,
         start: &FullState,
         trial: &FullState,
         h: f64,
         base_accel: f64,
-        alpha1: f64,
+        inside: bool,
         report: &mut StepReport<f64>,
     ) -> Result<FullState, Error> {
         let stop = self.params.ball.stop_angle;
-        let side = if alpha1 > 0.0 {
-            Side::Positive
+        let (side, tau) = if inside && !self.flies() {
+            let side = if self.relative_angle(trial) > 0.0 {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            let target = side.sign::<f64>() * stop;
+            (side, self.crossing_fraction(start, trial, h, target))
         } else {
-            Side::Negative
+            let (a0, a1) = self.branch_angles(start, trial);
+            let outer = if inside { a1 } else { a0 };
+            let side = if outer > 0.0 {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            let target = side.sign::<f64>() * stop;
+            let tau = absorber_core::flight::hermite_root(
+                a0 - target,
+                self.relative_rate(start) * h,
+                a1 - target,
+                self.relative_rate(trial) * h,
+            );
+            (side, tau)
         };
-        let target = side.sign::<f64>() * stop;
-        let tau = self.crossing_fraction(start, trial, h, target);
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
         let mut mid = if h1 > h * 1e-6 {
@@ -1522,7 +1618,7 @@ impl FullSolver {
         } else {
             start.clone()
         };
-        let impact = self.impact(&mut mid, side)?;
+        let impact = self.impact(&mut mid, side, inside)?;
         let acc = self.consistent_acceleration(&mid)?;
         report.iterations += acc.iterations;
         mid = self.with_accel(&mid, &acc.x)?;
@@ -1535,20 +1631,29 @@ impl FullSolver {
         } else {
             mid
         };
-        if end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
+        // A second crossing within the same (remaining) step: the ball came straight back
+        // onto the stop; end the step with it resting there (plastic).
+        if inside && end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
             let side2 = if self.relative_angle(&end) > 0.0 {
                 Side::Positive
             } else {
                 Side::Negative
             };
-            end = self.hold(&end, side2)?;
-            let acc = self.consistent_acceleration(&end)?;
-            end = self.with_accel(&end, &acc.x)?;
-            if side2.sign::<f64>() * self.contact_force(&end)? > 0.0 {
-                end.contact = Contact::Off;
-            }
+            end = self.rest_on_stop(&end, side2)?;
         }
         report.impact = Some(impact);
+        Ok(end)
+    }
+
+    /// The rolling ball put on the stop `side` and held there (plastic), with its consistent
+    /// acceleration; released at once if the stop would pull.
+    fn rest_on_stop(&self, s: &FullState, side: Side) -> Result<FullState, Error> {
+        let mut end = self.hold(s, side)?;
+        let acc = self.consistent_acceleration(&end)?;
+        end = self.with_accel(&end, &acc.x)?;
+        if side.sign::<f64>() * self.contact_force(&end)? > 0.0 {
+            end.contact = Contact::Off;
+        }
         Ok(end)
     }
 
@@ -1563,8 +1668,10 @@ impl FullSolver {
     }
 
     /// Stop impact: projects the ball onto the stop, applies `Λ ∇αᵀ` with
-    /// `Λ = −(1+e) α̇⁻ / (∇α W⁻¹ ∇αᵀ)`, decides whether the ball stays on the stop.
-    fn impact(&self, s: &mut FullState, side: Side) -> Result<Impact<f64>, Error> {
+    /// `Λ = −(1+e) α̇⁻ / (∇α W⁻¹ ∇αᵀ)` if the ball moves towards the stop's face (outwards from
+    /// between the stops, `inside`, inwards from the arc beyond), decides whether the ball stays
+    /// on the stop (only from between the stops).
+    fn impact(&self, s: &mut FullState, side: Side, inside: bool) -> Result<Impact<f64>, Error> {
         let ball = &self.params.ball;
         let loc0 = 4 * self.n - 4;
         // Projection: the held configuration gives φ on the stop; velocities are kept.
@@ -1581,16 +1688,7 @@ impl FullSolver {
         let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], &w, s.theta_ref)?;
         let (_, g, _) = self.bodies.relative_angle(&kin.w, &kin.wd, s.theta_ref);
         let ni = qi.len();
-        let mut grad = vec![0.0; ni];
-        for (k, &jk) in mode.independent().iter().enumerate() {
-            grad[loc0 + k] = g[jk]
-                + mode
-                    .dependent()
-                    .iter()
-                    .enumerate()
-                    .map(|(r, &j)| kin.bd[r][k] * g[j])
-                    .sum::<f64>();
-        }
+        let grad = self.ind_gradient(mode, &kin, &g, ni);
         let speed: f64 = grad.iter().zip(vi.iter()).map(|(a, b)| a * b).sum();
         let mut impact = Impact {
             time: s.time,
@@ -1601,7 +1699,12 @@ impl FullSolver {
             stuck: false,
         };
         let plastic = speed.abs() < ball.stick_speed;
-        if side.sign::<f64>() * speed > 0.0 {
+        let towards = if inside {
+            side.sign::<f64>() * speed
+        } else {
+            -side.sign::<f64>() * speed
+        };
+        if towards > 0.0 {
             let e = if plastic { 0.0 } else { ball.restitution };
             let it = &self.params.integrator;
             let ch = if ball.impact_model == ImpactModel::OverStep {
@@ -1617,7 +1720,7 @@ impl FullSolver {
             let mut y = grad.clone();
             {
                 let mut guard = lock(&self.work);
-                let Work { mass, reduced } = &mut *guard;
+                let Work { mass, reduced, .. } = &mut *guard;
                 let lu = self.reduced_lu(reduced, ni)?;
                 self.evaluate(
                     mass,
@@ -1646,7 +1749,7 @@ impl FullSolver {
             impact.impulse = lambda / ball.path_radius();
             impact.energy_loss = 0.5 * (1.0 - e * e) * speed * speed / wgt;
         }
-        if plastic {
+        if plastic && inside {
             let mut held = self.hold(s, side)?;
             let acc = self.consistent_acceleration(&held)?;
             held = self.with_accel(&held, &acc.x)?;
@@ -1685,7 +1788,7 @@ impl FullSolver {
         let g = self.params.gravity;
         let mut warm = self.local_of(&s.q);
         let mut guard = lock(&self.work);
-        let Work { mass, reduced } = &mut *guard;
+        let Work { mass, reduced, .. } = &mut *guard;
         let lu = self.reduced_lu(reduced, qi.len())?;
         let mut derivative = |ch: Chain<f64>| {
             self.evaluate(
@@ -1772,6 +1875,10 @@ impl FullSolver {
 impl Simulator for FullSolver {
     fn step(&mut self, base_accel: f64) -> Result<StepReport<f64>, Error> {
         FullSolver::step(self, base_accel)
+    }
+
+    fn in_flight(&self) -> bool {
+        FullSolver::in_flight(self)
     }
 
     fn observe(&self) -> Observation {
@@ -1870,7 +1977,12 @@ mod tests {
     fn residual_routes_agree_and_newton_matrix_is_derivative() {
         let mut s = FullSolver::new(Params::default(), SceneKind::FreeBall, 2).expect("valid");
         s.solve_static().expect("static");
-        let mode = Mode::Free;
+        newton_matrix_is_derivative(&s, Mode::Free);
+        // In flight (issue 13): the ball's rows are its mass, the rest as on the track.
+        newton_matrix_is_derivative(&s, Mode::Flying);
+    }
+
+    fn newton_matrix_is_derivative(s: &FullSolver, mode: Mode) {
         let ni = s.n_ind(mode);
         let mut qi = s.gather_ind(&s.equilibrium.q, mode);
         let mut vi = vec![0.0; ni];
@@ -1889,8 +2001,9 @@ mod tests {
         };
         let mut warm = s.local_of(&s.equilibrium.q);
         let mut guard = lock(&s.work);
-        let Work { mass, reduced } = &mut *guard;
+        let Work { mass, reduced, .. } = &mut *guard;
         let lu = s.reduced_lu(reduced, ni).expect("pattern");
+        assert_eq!(lu.n(), ni);
         s.evaluate(
             mass,
             Some((&mut *lu, &ch)),
