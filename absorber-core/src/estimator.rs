@@ -4,8 +4,12 @@
 //! sample the model takes one step ([`crate::Model::step_with_loads`]) under the base
 //! acceleration and the *estimated* tip load; the innovation `ν = y − (ä_tip + ÿ_b + b̂)`
 //! (measured minus predicted absolute tip acceleration, with the estimated sensor bias b̂)
-//! then corrects every state entry, the load and the bias by a constant gain:
-//! `x⁺ = x⁻ + K ν`. The gain is the steady-state Kalman gain of the model linearized about its
+//! then corrects the state, the load and the bias by a constant gain: `x⁺ = x⁻ + K ν`. The
+//! host's design leaves the positions uncorrected (`Gain::q = 0`): a correction of the vertical
+//! slopes at a deflected state changes the axial strain to first order, which the gain
+//! linearized at the static state does not know, and it drove the loop unstable at large swings
+//! (`host_sim::estimate::design`); velocities and accelerations carry the correction into the
+//! positions through the integrator. The gain is the steady-state Kalman gain of the model linearized about its
 //! static state — the discrete step map itself, `x_k = F x_{k−1} + G P_k` with the state
 //! `x = (q, q̇, q̈, a)` of the Newmark / generalized-α recursion — augmented with the unknown
 //! tip load P (first-order Gauss–Markov, `P_k = φ P_{k−1} + η`, increment variance `q_P` per
@@ -99,6 +103,12 @@ impl<T: Real, const D: usize> Gain<T, D> {
             return Err(Error::InvalidParameter {
                 field: "estimator.gain",
                 reason: "must be finite",
+            });
+        }
+        if self.load_decay < T::zero() || self.load_decay > T::one() {
+            return Err(Error::InvalidParameter {
+                field: "estimator.gain.load_decay",
+                reason: "must lie in [0, 1] (a growing load model is unstable)",
             });
         }
         Ok(())
@@ -278,5 +288,98 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Estimator<T, S, N, D> {
             clipped,
             report,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::loads::{ArmParams, PointMass, MAX_POINT_MASSES};
+    use crate::scene::{Arm, BeamOnly, FreeBall};
+    use crate::Params;
+
+    fn arm_model() -> Model<f64, Arm<BeamOnly>, 2, 8> {
+        let mut p = Params::<f64>::default();
+        p.beam.length = 6.0;
+        let arm = ArmParams {
+            root_diameter: 0.2,
+            tip_diameter: 0.1,
+            wall: 0.004,
+            density: 7850.0,
+            point_masses: [PointMass {
+                position: 6.0,
+                mass: 0.0,
+            }; MAX_POINT_MASSES],
+        };
+        Model::arm_at_rest(p, &arm, 0.0).expect("arm")
+    }
+
+    fn gain(load_decay: f64) -> Gain<f64, 8> {
+        Gain {
+            q: SVector::zeros(),
+            v: SVector::zeros(),
+            a: SVector::zeros(),
+            pseudo_accel: SVector::zeros(),
+            load: 0.0,
+            load_decay,
+            bias: 0.0,
+            stress_sd: 0.0,
+            load_sd: 0.0,
+        }
+    }
+
+    fn section() -> RootSection<f64> {
+        RootSection {
+            bending_rigidity: 1.0,
+            stress_per_curvature: 1.0,
+            extreme_fibre: 0.1,
+        }
+    }
+
+    /// Errors are values naming the field, and a rejected sample leaves the estimator as it
+    /// was: a bad gain, a scene without loads, a NaN measurement.
+    #[test]
+    fn estimator_errors_are_values_and_keep_the_state() {
+        let bad = Estimator::new(arm_model(), gain(1.5), section(), 20.0).err();
+        assert!(matches!(
+            bad,
+            Some(Error::InvalidParameter {
+                field: "estimator.gain.load_decay",
+                ..
+            })
+        ));
+        let paper = Model::<f64, FreeBall, 2, 9>::at_rest(Params::default(), 0.0).expect("model");
+        let g9 = Gain {
+            q: SVector::<f64, 9>::zeros(),
+            v: SVector::zeros(),
+            a: SVector::zeros(),
+            pseudo_accel: SVector::zeros(),
+            load: 0.0,
+            load_decay: 1.0,
+            bias: 0.0,
+            stress_sd: 0.0,
+            load_sd: 0.0,
+        };
+        assert!(matches!(
+            Estimator::new(paper, g9, section(), 20.0).err(),
+            Some(Error::InvalidParameter { field: "loads", .. })
+        ));
+        let mut e = Estimator::new(arm_model(), gain(0.9), section(), 20.0).expect("valid");
+        e.update(0.0, 0.01).expect("sample");
+        let before = (*e.model().state(), e.load(), e.bias());
+        assert_eq!(e.update(0.0, f64::NAN).err(), Some(Error::NonFiniteInput));
+        assert_eq!((*e.model().state(), e.load(), e.bias()), before);
+    }
+
+    /// With a zero gain the estimator is the model: its state after a sample is a plain step's.
+    #[test]
+    fn zero_gain_estimator_is_the_model() {
+        let mut e = Estimator::new(arm_model(), gain(1.0), section(), 20.0).expect("valid");
+        let mut m = arm_model();
+        for _ in 0..50 {
+            e.update(0.1, 0.3).expect("sample");
+            m.step_with_loads(0.1, &Loads::zero()).expect("step");
+        }
+        assert_eq!(e.model().state(), m.state());
     }
 }

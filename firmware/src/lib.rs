@@ -587,6 +587,10 @@ pub fn host_main<M: Sim>() {
 }
 
 pub mod cost;
+pub mod estimator;
+#[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
+#[rustfmt::skip]
+pub mod estimator_gain;
 
 #[cfg(target_os = "none")]
 pub mod target;

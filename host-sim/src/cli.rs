@@ -119,6 +119,10 @@ pub struct EstimateArgs {
     /// Directory for the CSV, plots and JSON.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write the estimator as firmware constants to this Rust file and stop
+    /// (firmware/src/estimator_gain.rs).
+    #[arg(long)]
+    pub emit_firmware: Option<PathBuf>,
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,

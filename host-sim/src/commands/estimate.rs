@@ -17,6 +17,12 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             a.load_step
         );
     }
+    if let Some(path) = &a.emit_firmware {
+        let text = crate::estimate::firmware_constants(&scene)?;
+        crate::output::atomic_write(path, text.as_bytes())?;
+        println!("wrote {}", path.display());
+        return Ok(());
+    }
     let duration = a.duration.unwrap_or(scene.file.duration);
     let mut out = match &a.out {
         Some(dir) => Some(OutputDir::open(dir, Some("estimate"), "estimate")?),

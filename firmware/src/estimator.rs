@@ -1,0 +1,135 @@
+//! `fw-estimator`: the root-stress estimator of the mast arm (`absorber_core::estimator`,
+//! `Arm<BeamOnly>`, N = 3, f32, the twin experiment's calibrated model and gain from
+//! [`crate::estimator_gain`]) fed every sample a synthetic tip accelerometer reading: 1 m/s² at
+//! the arm's 1.03 Hz plus a 20 mg bias, computed in `f32` with `libm` (the same on the host and
+//! the target). `Sim::step` is one `Estimator::update`: the model step with the estimated load,
+//! the innovation and the correction.
+
+use crate::estimator_gain as g;
+use crate::Sim;
+use absorber_core::estimator::{Estimator, Gain};
+use absorber_core::loads::{ArmParams, PointMass, MAX_POINT_MASSES};
+use absorber_core::monitor::stress::RootSection;
+use absorber_core::{Arm, BeamOnly, Error, Model, Params, StepReport};
+use nalgebra::SVector;
+
+/// The estimator under test.
+pub struct EstimatorSim {
+    est: Estimator<f32, Arm<BeamOnly>, 3, 12>,
+    k: u32,
+}
+
+/// The synthetic measurement at sample `k` \[m/s²\].
+#[inline(never)]
+pub fn tip_accel(k: u32, h: f32) -> f32 {
+    let omega = 2.0 * core::f32::consts::PI * 1.03;
+    libm::sinf(omega * k as f32 * h) + 0.196
+}
+
+fn params() -> Params<f32> {
+    let mut p = Params::<f32>::default();
+    let [length, mass, area, modulus, inertia] = g::BEAM;
+    p.beam.length = length;
+    p.beam.mass = mass;
+    p.beam.area = area;
+    p.beam.modulus = modulus;
+    p.beam.inertia = inertia;
+    let [gamma, beta, alpha_m, alpha_f, step, tolerance] = g::INTEGRATOR;
+    p.integrator.gamma = gamma;
+    p.integrator.beta = beta;
+    p.integrator.alpha_m = alpha_m;
+    p.integrator.alpha_f = alpha_f;
+    p.integrator.step = step;
+    p.integrator.tolerance = tolerance;
+    let [c, factor, gravity] = g::DAMPING_CALIBRATION_GRAVITY;
+    p.damping.stiffness_proportional = c;
+    p.calibration.bending_stiffness = factor;
+    p.gravity = gravity;
+    p
+}
+
+fn arm() -> ArmParams<f32> {
+    let [root_diameter, tip_diameter, wall, density] = g::ARM;
+    let mut point_masses = [PointMass {
+        position: 0.0,
+        mass: 0.0,
+    }; MAX_POINT_MASSES];
+    for (d, (position, mass)) in point_masses.iter_mut().zip(g::POINT_MASSES) {
+        *d = PointMass { position, mass };
+    }
+    ArmParams {
+        root_diameter,
+        tip_diameter,
+        wall,
+        density,
+        point_masses,
+    }
+}
+
+fn gain() -> Gain<f32, 12> {
+    let [load, load_decay, bias, stress_sd, load_sd] = g::GAIN_SCALARS;
+    Gain {
+        q: SVector::from(g::GAIN_Q),
+        v: SVector::from(g::GAIN_V),
+        a: SVector::from(g::GAIN_A),
+        pseudo_accel: SVector::from(g::GAIN_PA),
+        load,
+        load_decay,
+        bias,
+        stress_sd,
+        load_sd,
+    }
+}
+
+impl Sim for EstimatorSim {
+    fn name() -> &'static str {
+        "mast-arm estimator"
+    }
+
+    fn init() -> Result<Self, Error> {
+        let model = Model::arm_at_rest(params(), &arm(), 0.0)?;
+        let [bending_rigidity, stress_per_curvature, extreme_fibre] = g::SECTION;
+        let section = RootSection {
+            bending_rigidity,
+            stress_per_curvature,
+            extreme_fibre,
+        };
+        let mut est = Estimator::new(model, gain(), section, g::RANGE)?;
+        let h = est.model().params().integrator.step;
+        est.initialize_bias(0.0, tip_accel(0, h))?;
+        Ok(Self { est, k: 0 })
+    }
+
+    #[inline(never)]
+    fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
+        let k = self.k.wrapping_add(1);
+        let y = tip_accel(k, self.h());
+        let e = self.est.update(base_accel, y)?;
+        self.k = k;
+        Ok(e.report)
+    }
+
+    fn h(&self) -> f32 {
+        self.est.model().params().integrator.step
+    }
+
+    fn tip(&self) -> f32 {
+        self.est.model().tip_deflection()
+    }
+
+    fn ball(&self) -> f32 {
+        0.0
+    }
+
+    fn static_tip(&self) -> f32 {
+        self.est.model().static_tip_deflection()
+    }
+
+    /// The model's state, then the load and bias estimates and the root stress.
+    fn state_words(&self, f: &mut dyn FnMut(u32)) {
+        self.est.model().state_words(f);
+        f(self.est.load().to_bits());
+        f(self.est.bias().to_bits());
+        f(self.est.root_stress().to_bits());
+    }
+}
