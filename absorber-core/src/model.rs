@@ -314,6 +314,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     ///
     /// On error the state is left exactly as it was, and so is everything that influences
     /// later steps (modified Newton's kept matrix included).
+    ///
+    /// Never inlined: every caller (the firmware, the C API's five variants) runs the same
+    /// code, whatever the optimizer decides around the call.
+    #[inline(never)]
     pub fn step(&mut self, base_accel: T) -> Result<StepReport<T>, Error> {
         self.check_input(base_accel)?;
         self.work.begin_step(self.sys.params.integrator.newton);
