@@ -1290,51 +1290,10 @@ macro_rules! try_status {
 
 fn report_of<T: Real>(r: &StepReport<T>) -> AbsorberReport<T> {
     let z = T::zero();
-    match &r.impact {
-        None => AbsorberReport {
-            iterations: r.iterations,
-            increment: r.increment,
-            impact: 0,
-            impact_stuck: 0,
-            impact_side: 0,
-            impact_time: z,
-            impact_relative_speed: z,
-            impact_impulse: z,
-            impact_energy_loss: z,
-            ..flight_fields(r)
-        },
-        Some(i) => AbsorberReport {
-            iterations: r.iterations,
-            increment: r.increment,
-            impact: 1,
-            impact_stuck: u8::from(i.stuck),
-            impact_side: match i.side {
-                Side::Positive => 1,
-                Side::Negative => -1,
-            },
-            impact_time: i.time,
-            impact_relative_speed: i.relative_speed,
-            impact_impulse: i.impulse,
-            impact_energy_loss: i.energy_loss,
-            ..flight_fields(r)
-        },
-    }
-}
-
-/// A report with only the flight fields of `r` set.
-fn flight_fields<T: Real>(r: &StepReport<T>) -> AbsorberReport<T> {
-    let z = T::zero();
     let l = r.landing;
-    AbsorberReport {
-        iterations: 0,
-        increment: z,
-        impact: 0,
-        impact_stuck: 0,
-        impact_side: 0,
-        impact_time: z,
-        impact_relative_speed: z,
-        impact_impulse: z,
-        impact_energy_loss: z,
+    let mut out = AbsorberReport {
+        iterations: r.iterations,
+        increment: r.increment,
         separation: u8::from(r.separation.is_some()),
         landing: l.map_or(0, |l| if l.bounced { 1 } else { 2 }),
         separation_time: r.separation.unwrap_or(z),
@@ -1342,7 +1301,27 @@ fn flight_fields<T: Real>(r: &StepReport<T>) -> AbsorberReport<T> {
         landing_normal_speed: l.map_or(z, |l| l.normal_speed),
         landing_normal_impulse: l.map_or(z, |l| l.normal_impulse),
         landing_tangential_impulse: l.map_or(z, |l| l.tangential_impulse),
+        impact: 0,
+        impact_stuck: 0,
+        impact_side: 0,
+        impact_time: z,
+        impact_relative_speed: z,
+        impact_impulse: z,
+        impact_energy_loss: z,
+    };
+    if let Some(i) = &r.impact {
+        out.impact = 1;
+        out.impact_stuck = u8::from(i.stuck);
+        out.impact_side = match i.side {
+            Side::Positive => 1,
+            Side::Negative => -1,
+        };
+        out.impact_time = i.time;
+        out.impact_relative_speed = i.relative_speed;
+        out.impact_impulse = i.impulse;
+        out.impact_energy_loss = i.energy_loss;
     }
+    out
 }
 
 /// Steps the model.
