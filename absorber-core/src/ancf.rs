@@ -505,11 +505,15 @@ impl<T: Real> AxialQuadrature<T> {
 
     /// Axial force `Q_l` and the 2×2 blocks of its tangent `K_l`: `blocks[i][j] = (xx, xy, yy)`
     /// of block `(i, j)` for `j ≥ i` (the others by symmetry).
+    ///
+    /// Two passes: the force and each point's `w_p R_p` first, then each block summed over the
+    /// points in one set of three accumulators (the same sums, in the same order, as one pass
+    /// over the points adding into all thirty entries — which the M4 cannot keep in registers).
     #[inline]
     fn force_and_blocks(&self, u: &ElementVector<T>) -> (ElementVector<T>, [[[T; 3]; 4]; 4]) {
         let mut f = ElementVector::zeros();
-        let mut blocks = [[[T::zero(); 3]; 4]; 4];
-        for (sx, w) in self.sx.iter().zip(self.weight.iter()) {
+        let mut rr = [[T::zero(); 3]; 5];
+        for ((sx, w), rr_p) in self.sx.iter().zip(self.weight.iter()).zip(rr.iter_mut()) {
             let (d1, d2, eps) = Self::strain(sx, u);
             let (r1, r2) = (T::one() + d1, d2);
             let c = *w * eps;
@@ -519,14 +523,22 @@ impl<T: Real> AxialQuadrature<T> {
                     *fy += *s * (r2 * c);
                 }
             }
-            let rr = [*w * (r1 * r1 + eps), *w * (r1 * r2), *w * (r2 * r2 + eps)];
-            for (i, (row, si)) in blocks.iter_mut().zip(sx.iter()).enumerate() {
-                for (block, sj) in row.iter_mut().zip(sx.iter()).skip(i) {
+            *rr_p = [*w * (r1 * r1 + eps), *w * (r1 * r2), *w * (r2 * r2 + eps)];
+        }
+        let mut blocks = [[[T::zero(); 3]; 4]; 4];
+        for (i, row) in blocks.iter_mut().enumerate() {
+            for (j, block) in row.iter_mut().enumerate().skip(i) {
+                let mut acc = [T::zero(); 3];
+                for (sx, rr_p) in self.sx.iter().zip(rr.iter()) {
+                    let (Some(si), Some(sj)) = (sx.get(i), sx.get(j)) else {
+                        continue;
+                    };
                     let sij = *si * *sj;
-                    for (b, r) in block.iter_mut().zip(rr.iter()) {
+                    for (b, r) in acc.iter_mut().zip(rr_p.iter()) {
                         *b += sij * *r;
                     }
                 }
+                *block = acc;
             }
         }
         (f, blocks)

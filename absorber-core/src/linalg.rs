@@ -162,52 +162,85 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
 
     /// Solves `J x = b` in place from [`BandMatrix::factor`]'s factors; `false` if the result
     /// is not finite.
+    ///
+    /// Every row's dot product runs over a window of fixed width: the full `BAND` inside the
+    /// matrix, and `0 … BAND − 1` in the rows whose band reaches past an edge (the first
+    /// `BAND` rows going forward, the last `BAND` going back), one instantiation per width.
+    /// Sums run in index order in every row, as a plain loop would.
     pub fn solve(&self, b: &mut SVector<T, D>) -> bool {
         let x = b.as_mut_slice();
-        // Forward: x_i −= Σ_m L[i, i−m] x_{i−m} (a full 7-wide window from row BAND on).
-        for (i, row) in self.rows.iter().enumerate() {
-            let start = i.saturating_sub(BAND);
-            let s = match (row.first_chunk::<BAND>(), window::<T, BAND>(x, start)) {
-                (Some(l), Some(prev)) if i >= BAND => dot(l, prev),
-                _ => {
-                    let mut s = T::zero();
-                    if let (Some(l), Some(prev)) =
-                        (row.get(BAND - (i - start)..BAND), x.get(start..i))
-                    {
-                        for (a, b) in l.iter().zip(prev.iter()) {
-                            s += *a * *b;
-                        }
-                    }
-                    s
-                }
+        // Forward: x_i −= Σ_m L[i, i−m] x_{i−m}.
+        self.forward_edge::<0>(x);
+        self.forward_edge::<1>(x);
+        self.forward_edge::<2>(x);
+        self.forward_edge::<3>(x);
+        self.forward_edge::<4>(x);
+        self.forward_edge::<5>(x);
+        self.forward_edge::<6>(x);
+        for (i, row) in self.rows.iter().enumerate().skip(BAND) {
+            let s = match (row.first_chunk::<BAND>(), window::<T, BAND>(x, i - BAND)) {
+                (Some(l), Some(prev)) => dot(l, prev),
+                _ => T::zero(),
             };
             if let Some(xi) = x.get_mut(i) {
                 *xi -= s;
             }
         }
-        // Backward: x_i = (x_i − Σ_m U[i, i+m] x_{i+m}) / U[i, i].
-        for (i, row) in self.rows.iter().enumerate().rev() {
-            let end = (i + 1 + BAND).min(D);
+        // Backward: x_i = (x_i − Σ_m U[i, i+m] x_{i+m}) / U[i, i], from the last row.
+        self.backward_edge::<0>(x);
+        self.backward_edge::<1>(x);
+        self.backward_edge::<2>(x);
+        self.backward_edge::<3>(x);
+        self.backward_edge::<4>(x);
+        self.backward_edge::<5>(x);
+        self.backward_edge::<6>(x);
+        let inner = D.saturating_sub(BAND);
+        for (i, row) in self.rows.iter().enumerate().take(inner).rev() {
             let s = match (row.last_chunk::<BAND>(), window::<T, BAND>(x, i + 1)) {
                 (Some(u), Some(next)) => dot(u, next),
-                _ => {
-                    let mut s = T::zero();
-                    if let (Some(u), Some(next)) = (
-                        row.get(BAND + 1..BAND + 1 + (end - i - 1)),
-                        x.get(i + 1..end),
-                    ) {
-                        for (a, b) in u.iter().zip(next.iter()) {
-                            s += *a * *b;
-                        }
-                    }
-                    s
-                }
+                _ => T::zero(),
             };
             if let Some(xi) = x.get_mut(i) {
                 *xi = (*xi - s) / row[BAND];
             }
         }
         x.iter().all(|v| v.is_finite())
+    }
+
+    /// Forward substitution of row `K < BAND` (its `K` entries of `L` left of the diagonal).
+    #[inline(always)]
+    fn forward_edge<const K: usize>(&self, x: &mut [T]) {
+        const { assert!(K < BAND) };
+        let (Some(row), Some(prev)) = (self.rows.get(K), window::<T, K>(x, 0)) else {
+            return;
+        };
+        let Some(l) = row.get(BAND - K..BAND).and_then(|s| s.first_chunk::<K>()) else {
+            return;
+        };
+        let s = dot(l, prev);
+        if let Some(xi) = x.get_mut(K) {
+            *xi -= s;
+        }
+    }
+
+    /// Backward substitution of row `D − 1 − W` (`W < BAND` entries of `U` right of the
+    /// diagonal, up to the last column).
+    #[inline(always)]
+    fn backward_edge<const W: usize>(&self, x: &mut [T]) {
+        const { assert!(W < BAND) };
+        let Some(i) = D.checked_sub(W + 1) else {
+            return;
+        };
+        let (Some(row), Some(next)) = (self.rows.get(i), window::<T, W>(x, i + 1)) else {
+            return;
+        };
+        let Some(u) = row.get(BAND + 1..).and_then(|s| s.first_chunk::<W>()) else {
+            return;
+        };
+        let s = dot(u, next);
+        if let Some(xi) = x.get_mut(i) {
+            *xi = (*xi - s) / row[BAND];
+        }
     }
 }
 
