@@ -127,7 +127,8 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
             };
             let p = pivot_row[BAND];
             // U[k, k+1 ..= k+BAND].
-            let Some(u) = pivot_row.last_chunk::<BAND>() else {
+            // Copied: the eliminations below then keep it in registers.
+            let Some(&u) = pivot_row.last_chunk::<BAND>() else {
                 return false;
             };
             let mut largest = T::zero();
