@@ -570,30 +570,35 @@ impl<T: Real> AxialQuadrature<T> {
         f
     }
 
-    /// Axial force `Q_l`, with `scale · K_l` added into the 8×8 `block` (rows of the element's
-    /// local coordinates): the step path's form of [`AxialQuadrature::tangent`].
-    pub fn add_tangent(
+    /// Axial force `Q_l`, and the element's 8×8 Newton block written into `block`:
+    /// `linear ⊗ I₂ + scale · K_l` (`linear` = the 4×4 `c_m M₄ + c_k K₄`; rows of the element's
+    /// local coordinates). The step path's form of [`AxialQuadrature::tangent`]: every entry
+    /// written once, `(linear or 0) + scale · K_l`.
+    #[inline(always)]
+    pub fn tangent_block(
         &self,
         u: &ElementVector<T>,
+        linear: &[[T; 4]; 4],
         scale: T,
         block: &mut [[T; 8]; 8],
     ) -> ElementVector<T> {
         let (f, blocks) = self.force_and_blocks(u);
+        let zero = T::zero();
         // Block (i, j) with j < i is block (j, i) transposed; a 2×2 block is symmetric itself.
-        for (i, rows) in block.chunks_exact_mut(2).enumerate() {
+        for (i, (rows, lin)) in block.chunks_exact_mut(2).zip(linear.iter()).enumerate() {
             let [row_x, row_y] = rows else {
                 continue;
             };
             let pairs = row_x.chunks_exact_mut(2).zip(row_y.chunks_exact_mut(2));
-            for (j, (px, py)) in pairs.enumerate() {
+            for (j, ((px, py), l)) in pairs.zip(lin.iter()).enumerate() {
                 let (a, b) = if j >= i { (i, j) } else { (j, i) };
                 if let (Some([xx, xy, yy]), [x0, x1], [y0, y1]) =
                     (blocks.get(a).and_then(|r| r.get(b)), px, py)
                 {
-                    *x0 += scale * *xx;
-                    *x1 += scale * *xy;
-                    *y0 += scale * *xy;
-                    *y1 += scale * *yy;
+                    *x0 = *l + scale * *xx;
+                    *x1 = zero + scale * *xy;
+                    *y0 = zero + scale * *xy;
+                    *y1 = *l + scale * *yy;
                 }
             }
         }

@@ -97,6 +97,23 @@ impl<T: Real> Beam<T> {
         }
     }
 
+    /// The linear part of the element's Newton matrix per direction, `c_m M₄ + (c_q + c_v c) K₄`
+    /// (4×4; the 8×8 block is it `⊗ I₂` plus the axial tangent).
+    #[inline]
+    fn linear_newton4(&self, ch: &Chain<T>) -> [[T; 4]; 4] {
+        let c_k = ch.c_q + ch.c_v * self.damping;
+        let mut linear = [[T::zero(); 4]; 4];
+        for (lr, (mr, kr)) in linear
+            .iter_mut()
+            .zip(self.mass4.iter().zip(self.stiffness4.iter()))
+        {
+            for (l, (m, kk)) in lr.iter_mut().zip(mr.iter().zip(kr.iter())) {
+                *l = ch.c_m * *m + c_k * *kk;
+            }
+        }
+        linear
+    }
+
     /// Element `k`'s linear forces `M₄ ä + K₄ (u + c u̇)` per direction plus the axial force,
     /// minus the weight, added into `r`.
     #[inline]
@@ -177,23 +194,10 @@ impl<T: Real> Beam<T> {
         r: &mut SVector<T, D>,
         jac: &mut BandMatrix<T, D>,
     ) {
-        let c_k = ch.c_q + ch.c_v * self.damping;
+        let linear = self.linear_newton4(ch);
         let mut block = [[T::zero(); 8]; 8];
-        for (i, (mr, kr)) in self.mass4.iter().zip(self.stiffness4.iter()).enumerate() {
-            for (j, (m, kk)) in mr.iter().zip(kr.iter()).enumerate() {
-                let value = ch.c_m * *m + c_k * *kk;
-                for dir in 0..2 {
-                    if let Some(x) = block
-                        .get_mut(2 * i + dir)
-                        .and_then(|row| row.get_mut(2 * j + dir))
-                    {
-                        *x = value;
-                    }
-                }
-            }
-        }
         let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
-        let axial = self.quadrature.add_tangent(&u, ch.c_q, &mut block);
+        let axial = self.quadrature.tangent_block(&u, &linear, ch.c_q, &mut block);
         let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
         jac.add_block8(first, skip, &block);
         self.add_element_residual(k, &u, (&ue, &ae), &axial, applied, r);
@@ -212,26 +216,12 @@ impl<T: Real> Beam<T> {
         jac: &mut BandMatrix<T, D>,
     ) {
         let weight = self.element.gravity_force(g_eff);
-        let c_k = ch.c_q + ch.c_v * self.damping;
         // The linear part, the same for every element: (c_m M₄ + c_k K₄) ⊗ I₂.
-        let mut linear = [[T::zero(); 8]; 8];
-        for (i, (mr, kr)) in self.mass4.iter().zip(self.stiffness4.iter()).enumerate() {
-            for (j, (m, kk)) in mr.iter().zip(kr.iter()).enumerate() {
-                let value = ch.c_m * *m + c_k * *kk;
-                for dir in 0..2 {
-                    if let Some(x) = linear
-                        .get_mut(2 * i + dir)
-                        .and_then(|row| row.get_mut(2 * j + dir))
-                    {
-                        *x = value;
-                    }
-                }
-            }
-        }
+        let linear = self.linear_newton4(ch);
+        let mut block = [[T::zero(); 8]; 8];
         for k in 0..n {
             let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
-            let mut block = linear;
-            let axial = self.quadrature.add_tangent(&u, ch.c_q, &mut block);
+            let axial = self.quadrature.tangent_block(&u, &linear, ch.c_q, &mut block);
             // Element k's local row 0 is global row 4k − 4; the root node (k = 0) is clamped.
             let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
             jac.add_block8(first, skip, &block);
