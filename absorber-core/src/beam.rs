@@ -197,7 +197,9 @@ impl<T: Real> Beam<T> {
         let linear = self.linear_newton4(ch);
         let mut block = [[T::zero(); 8]; 8];
         let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
-        let axial = self.quadrature.tangent_block(&u, &linear, ch.c_q, &mut block);
+        let axial = self
+            .quadrature
+            .tangent_block(&u, &linear, ch.c_q, &mut block);
         let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
         jac.add_block8(first, skip, &block);
         self.add_element_residual(k, &u, (&ue, &ae), &axial, applied, r);
@@ -221,7 +223,9 @@ impl<T: Real> Beam<T> {
         let mut block = [[T::zero(); 8]; 8];
         for k in 0..n {
             let (u, ue, ae) = (gather(q, k), gather(v, k), gather(a, k));
-            let axial = self.quadrature.tangent_block(&u, &linear, ch.c_q, &mut block);
+            let axial = self
+                .quadrature
+                .tangent_block(&u, &linear, ch.c_q, &mut block);
             // Element k's local row 0 is global row 4k − 4; the root node (k = 0) is clamped.
             let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
             jac.add_block8(first, skip, &block);

@@ -101,9 +101,17 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
         }
     }
 
-    /// The same matrix, dense (the pivoting fallback; modes and tests).
+    /// The same matrix, dense (modes and tests).
     pub fn to_dense(&self) -> SMatrix<T, D, D> {
         let mut m = SMatrix::<T, D, D>::zeros();
+        self.write_dense(&mut m);
+        m
+    }
+
+    /// Writes the same matrix, dense, into `m` (every entry; the pivoting fallback, in place:
+    /// no `D×D` matrix on the stack).
+    pub fn write_dense(&self, m: &mut SMatrix<T, D, D>) {
+        m.fill(T::zero());
         for (i, row) in self.rows.iter().enumerate() {
             for (k, v) in row.iter().enumerate() {
                 if let Some(x) = (i + k).checked_sub(BAND).and_then(|j| m.get_mut((i, j))) {
@@ -111,7 +119,6 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
                 }
             }
         }
-        m
     }
 
     /// Factors in place, `J = L U` without row exchanges (unit lower `L` below the diagonal,

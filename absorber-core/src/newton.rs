@@ -244,7 +244,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         if rebuild {
             self.assemble_problem(p, qva, r, &mut slot.band);
         }
-        slot.dense = slot.band.to_dense();
+        slot.band.write_dense(&mut slot.dense);
         linalg::factor_pivoted(&mut slot.dense)
             .map(Some)
             .ok_or(Error::Singular)
