@@ -7,6 +7,14 @@
 //! same band. Gaussian elimination without row exchanges keeps that band ([`BAND`]), so the
 //! factorization costs `O(D·BAND²)` instead of `O(D³)` and never writes outside the band.
 //!
+//! Finer, the matrix lives in the **node envelope**: `J[i,j] = 0` unless the nodes `i / 4` and
+//! `j / 4` are equal or neighbours (the ball's spin, index `4N`, couples only with the end node
+//! `N − 1`, as a node `N` would). Row `4n + p` of `U` and column `4n + p` of `L` then end at
+//! index `4n + 7`: `7 − p` entries past the diagonal, not `BAND`, and elimination without row
+//! exchanges creates no fill outside the envelope. [`BandMatrix::factor`] and
+//! [`BandMatrix::solve`] work on those widths only (a quarter less work); the model's tests
+//! check that every assembled Newton matrix has exact zeros outside the envelope.
+//!
 //! **Why no pivoting.** The Newmark matrix `c_m M + c_v C + c_q K` is dominated by the
 //! consistent mass `M`, which is symmetric positive definite; the stiffness and the tip's
 //! velocity terms enter scaled by `βh²` and `γh`. Elimination without pivoting is stable for it
@@ -33,6 +41,14 @@ pub const PIVOT_RATIO: f64 = 1e-3;
 
 /// Entries kept per row of a [`BandMatrix`]: columns `i − BAND ..= i + BAND`.
 pub const WIDTH: usize = 2 * BAND + 1;
+
+/// Coordinates per node: the envelope's period.
+pub const NODE: usize = 4;
+
+/// Whether `J[i,j]` lies in the node envelope (module doc).
+pub fn in_envelope(i: usize, j: usize) -> bool {
+    (i / NODE).abs_diff(j / NODE) <= 1
+}
 
 /// A `D×D` matrix with `J[i,j] = 0` for `|i − j| > BAND`, stored by rows of the band:
 /// `rows[i][j − i + BAND] = J[i,j]` (entries outside the matrix stay zero). Every operation
@@ -122,46 +138,64 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
     }
 
     /// Factors in place, `J = L U` without row exchanges (unit lower `L` below the diagonal,
-    /// `U` on and above). `false` if a pivot is not finite or smaller than `ratio` times the
-    /// largest entry below it in its column (the matrix is then destroyed).
+    /// `U` on and above), for a matrix in the node envelope (module doc). `false` if a pivot
+    /// is not finite or smaller than `ratio` times the largest entry below it in its column (the
+    /// matrix is then destroyed).
     pub fn factor(&mut self, ratio: T) -> bool {
         for k in 0..D {
-            let Some((head, tail)) = self.rows.split_at_mut_checked(k + 1) else {
-                return false;
+            // Column 4n + p: 7 − p rows below and 7 − p entries of U to the right.
+            let ok = match k % NODE {
+                0 => self.eliminate::<7>(k, ratio),
+                1 => self.eliminate::<6>(k, ratio),
+                2 => self.eliminate::<5>(k, ratio),
+                _ => self.eliminate::<4>(k, ratio),
             };
-            let Some(pivot_row) = head.last() else {
-                return false;
-            };
-            let p = pivot_row[BAND];
-            // U[k, k+1 ..= k+BAND].
-            // Copied: the eliminations below then keep it in registers.
-            let Some(&u) = pivot_row.last_chunk::<BAND>() else {
-                return false;
-            };
-            let mut largest = T::zero();
-            for (m, row) in tail.iter().take(BAND).enumerate() {
-                // A comparison, not `max`: `fmaxf` is a library call on the M4.
-                let v = row[BAND - 1 - m].abs();
-                if v > largest {
-                    largest = v;
-                }
-            }
-            if !p.is_finite() || !is_positive(p.abs()) || p.abs() < ratio * largest {
+            if !ok {
                 return false;
             }
-            let inv = T::one() / p;
-            // Row k+1+m: its column k sits at BAND − 1 − m, columns k+1 … k+BAND follow.
-            for (m, row) in tail.iter_mut().take(BAND).enumerate() {
-                let c = BAND - 1 - m;
-                let l = row[c] * inv;
-                row[c] = l;
-                if l == T::zero() {
-                    continue;
-                }
-                if let Some(dst) = row.get_mut(c + 1..c + 1 + BAND) {
-                    for (d, s) in dst.iter_mut().zip(u.iter()) {
-                        *d -= l * *s;
-                    }
+        }
+        true
+    }
+
+    /// Eliminates column `k` from the `W` rows below it, with the `W` entries of `U` right of
+    /// the pivot (fixed widths: unrolled, no index check).
+    #[inline(always)]
+    fn eliminate<const W: usize>(&mut self, k: usize, ratio: T) -> bool {
+        const { assert!(W <= BAND) };
+        let Some((head, tail)) = self.rows.split_at_mut_checked(k + 1) else {
+            return false;
+        };
+        let Some(pivot_row) = head.last() else {
+            return false;
+        };
+        let p = pivot_row[BAND];
+        // U[k, k+1 ..= k+W], copied: the eliminations below then keep it in registers.
+        let Some(&u) = pivot_row.get(BAND + 1..).and_then(|s| s.first_chunk::<W>()) else {
+            return false;
+        };
+        let mut largest = T::zero();
+        for (m, row) in tail.iter().take(W).enumerate() {
+            // A comparison, not `max`: `fmaxf` is a library call on the M4.
+            let v = row[BAND - 1 - m].abs();
+            if v > largest {
+                largest = v;
+            }
+        }
+        if !p.is_finite() || !is_positive(p.abs()) || p.abs() < ratio * largest {
+            return false;
+        }
+        let inv = T::one() / p;
+        // Row k+1+m: its column k sits at BAND − 1 − m, columns k+1 … k+W follow.
+        for (m, row) in tail.iter_mut().take(W).enumerate() {
+            let c = BAND - 1 - m;
+            let l = row[c] * inv;
+            row[c] = l;
+            if l == T::zero() {
+                continue;
+            }
+            if let Some(dst) = row.get_mut(c + 1..).and_then(|s| s.first_chunk_mut::<W>()) {
+                for (d, s) in dst.iter_mut().zip(u.iter()) {
+                    *d -= l * *s;
                 }
             }
         }
@@ -186,9 +220,12 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
         self.forward_edge::<5>(x);
         self.forward_edge::<6>(x);
         for (i, row) in self.rows.iter().enumerate().skip(BAND) {
-            let s = match (row.first_chunk::<BAND>(), window::<T, BAND>(x, i - BAND)) {
-                (Some(l), Some(prev)) => dot(l, prev),
-                _ => T::zero(),
+            // Row 4n + p: L from column 4(n − 1), 4 + p entries.
+            let s = match i % NODE {
+                0 => forward_dot::<T, 4>(row, x, i),
+                1 => forward_dot::<T, 5>(row, x, i),
+                2 => forward_dot::<T, 6>(row, x, i),
+                _ => forward_dot::<T, 7>(row, x, i),
             };
             if let Some(xi) = x.get_mut(i) {
                 *xi -= s;
@@ -204,9 +241,12 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
         self.backward_edge::<6>(x);
         let inner = D.saturating_sub(BAND);
         for (i, row) in self.rows.iter().enumerate().take(inner).rev() {
-            let s = match (row.last_chunk::<BAND>(), window::<T, BAND>(x, i + 1)) {
-                (Some(u), Some(next)) => dot(u, next),
-                _ => T::zero(),
+            // Row 4n + p: U to column 4n + 7, 7 − p entries.
+            let s = match i % NODE {
+                0 => backward_dot::<T, 7>(row, x, i),
+                1 => backward_dot::<T, 6>(row, x, i),
+                2 => backward_dot::<T, 5>(row, x, i),
+                _ => backward_dot::<T, 4>(row, x, i),
             };
             if let Some(xi) = x.get_mut(i) {
                 *xi = (*xi - s) / row[BAND];
@@ -249,6 +289,30 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
         if let Some(xi) = x.get_mut(i) {
             *xi = (*xi - s) / row[BAND];
         }
+    }
+}
+
+/// `Σ_m L[i, i−W+m] x[i−W+m]`: the last `W` entries of `L` left of row `i`'s diagonal.
+#[inline(always)]
+fn forward_dot<T: Real, const W: usize>(row: &[T; WIDTH], x: &[T], i: usize) -> T {
+    match (
+        row.get(BAND - W..BAND).and_then(|s| s.first_chunk::<W>()),
+        i.checked_sub(W).and_then(|start| window::<T, W>(x, start)),
+    ) {
+        (Some(l), Some(prev)) => dot(l, prev),
+        _ => T::zero(),
+    }
+}
+
+/// `Σ_m U[i, i+1+m] x[i+1+m]`: the first `W` entries of `U` right of row `i`'s diagonal.
+#[inline(always)]
+fn backward_dot<T: Real, const W: usize>(row: &[T; WIDTH], x: &[T], i: usize) -> T {
+    match (
+        row.get(BAND + 1..).and_then(|s| s.first_chunk::<W>()),
+        window::<T, W>(x, i + 1),
+    ) {
+        (Some(u), Some(next)) => dot(u, next),
+        _ => T::zero(),
     }
 }
 
@@ -397,26 +461,26 @@ mod tests {
         assert!(!b.factor(PIVOT_RATIO));
     }
 
-    /// A banded, diagonally dominant 20×20 matrix (half-bandwidth 7, non-symmetric): the banded
+    /// A diagonally dominant 21×21 matrix in the node envelope (non-symmetric): the banded
     /// factors (dense storage and band storage) solve it as the pivoted dense LU does, to
     /// rounding.
     #[test]
     fn banded_factors_equal_dense_ones_on_a_band_matrix() {
-        let mut a = SMatrix::<f64, 20, 20>::zeros();
-        for i in 0..20usize {
-            for j in 0..20usize {
-                if i.abs_diff(j) <= BAND {
+        let mut a = SMatrix::<f64, 21, 21>::zeros();
+        for i in 0..21usize {
+            for j in 0..21usize {
+                if in_envelope(i, j) {
                     a[(i, j)] = ((i * 7 + j * 3) as f64 * 0.37).sin();
                 }
             }
             a[(i, i)] += 12.0;
         }
-        let x = SVector::<f64, 20>::from_fn(|i, _| (i as f64 * 0.9).cos());
+        let x = SVector::<f64, 21>::from_fn(|i, _| (i as f64 * 0.9).cos());
         let dense = solve_dense(a, a * x).expect("regular");
         assert!((dense - x).amax() < 1e-13);
-        let mut band = BandMatrix::<f64, 20>::zeros();
-        for i in 0..20 {
-            for j in 0..20 {
+        let mut band = BandMatrix::<f64, 21>::zeros();
+        for i in 0..21 {
+            for j in 0..21 {
                 band.add(i, j, a[(i, j)]);
             }
         }

@@ -399,6 +399,16 @@ mod tests {
             c_m: 1.0,
         };
         let (r0, jac, f0) = m.sys.assemble(&q, &v, &a, 9.0, &ch, contact, false);
+        // The banded LU works in the node envelope: nothing may be assembled outside it.
+        for i in 0..D {
+            for j in 0..D {
+                assert!(
+                    crate::linalg::in_envelope(i, j) || jac[(i, j)] == 0.0,
+                    "J[{i},{j}] = {} outside the node envelope",
+                    jac[(i, j)]
+                );
+            }
+        }
         // The residual alone (reused-matrix iterations) is the same residual.
         let mut r1 = SVector::<f64, D>::zeros();
         let f1 = m.sys.residual([&q, &v, &a], 9.0, contact, false, &mut r1);
