@@ -415,12 +415,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         if n_end >= T::zero() || !n_end.is_finite() {
             return Ok(()); // the track pushes: the step stands (the common case, no copy)
         }
-        *next = self.separate(start, n_end, base_accel, ws, report)?;
-        Ok(())
+        self.separate(start, n_end, base_accel, ws, report, next)
     }
 
-    /// The step from `start` redone with the separation inside it (`n_end` < 0 at its end). Kept
-    /// out of line (rare).
+    /// The step from `start` redone with the separation inside it (`n_end` < 0 at its end),
+    /// into `next`. Kept out of line (rare).
     #[inline(never)]
     #[cold]
     fn separate(
@@ -430,24 +429,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         base_accel: T,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
-    ) -> Result<State<T, D>, Error> {
-        let kind = self.params.integrator.newton;
+        next: &mut State<T, D>,
+    ) -> Result<(), Error> {
         let h = self.params.integrator.step;
         let tau = separation_fraction(self.normal_force(start), n_end);
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
-        let mut mid = if h1 > h * lit(1e-6) {
-            let (m, s) = self.newmark(start, h1, accel_mid, ws, kind)?;
-            report.iterations += s.iterations;
-            report.increment = report.increment.max(s.increment);
-            m
-        } else {
-            *start
-        };
+        let mut mid = *start;
+        self.sub_step(start, h1, accel_mid, ws, report, &mut mid)?;
         mid.time = start.time + h1;
         self.take_off(&mut mid, ws, report)?;
         report.separation = Some(mid.time);
-        self.flight_rest(&mid, h - h1, base_accel, ws, report)
+        self.flight_rest(&mid, h - h1, base_accel, ws, report, next)
     }
 
     /// The rolling ball leaves the track at `s`: the flying state from the rolling kinematics
@@ -497,31 +490,23 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         base_accel: T,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
-    ) -> Result<State<T, D>, Error> {
-        let h = self.params.integrator.step;
-        let mut end = if h_rest > h * lit(1e-6) {
-            let (e, s) =
-                self.newmark(mid, h_rest, base_accel, ws, self.params.integrator.newton)?;
-            report.iterations += s.iterations;
-            report.increment = report.increment.max(s.increment);
-            e
-        } else {
-            *mid
-        };
+        end: &mut State<T, D>,
+    ) -> Result<(), Error> {
+        self.sub_step(mid, h_rest, base_accel, ws, report, end)?;
         if end.contact == Contact::InFlight {
-            if let Some((side, inside, _)) = self.stop_crossing(mid, &end) {
-                let impact = self.stop_in_flight(&mut end, side, inside, ws, report)?;
+            if let Some((side, inside, _)) = self.stop_crossing(mid, end) {
+                let impact = self.stop_in_flight(end, side, inside, ws, report)?;
                 report.impact = report.impact.or(Some(impact));
             }
-            if self.relative(&end).r > self.params.ball.path_radius() {
-                self.land(&mut end, ws, report)?;
+            if self.relative(end).r > self.params.ball.path_radius() {
+                self.land(end, ws, report)?;
             }
         } else if S::STOPS {
             let stop = self.params.ball.stop_angle;
-            let alpha = wrap(self.relative_angle(&end));
+            let alpha = wrap(self.relative_angle(end));
             if end.contact == Contact::Off && alpha.abs() > stop {
                 // Landed and rolled onto a stop within the rest: it rests there (plastic).
-                self.rest_on_stop(&mut end, ws, report)?;
+                self.rest_on_stop(end, ws, report)?;
             } else if end.contact == Contact::Beyond && alpha.abs() < stop {
                 // Landed beyond a stop and rolled back onto its other face: an impact there.
                 let side = if is_positive(alpha) {
@@ -529,56 +514,50 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 } else {
                     Side::Negative
                 };
-                let impact = self.impact(&mut end, side, false, ws)?;
+                let impact = self.impact(end, side, false, ws)?;
                 report.impact = report.impact.or(Some(impact));
-                self.restart_acceleration(&mut end, ws, report)?;
+                self.restart_acceleration(end, ws, report)?;
             }
         }
-        Ok(end)
+        Ok(())
     }
 
     /// The events of a flight step from `start` whose trial end is `trial`: a landing or a stop,
-    /// whichever comes first, splits the step (module doc). Kept out of line: the rolling step's
-    /// frame does not carry its states.
+    /// whichever comes first, splits the step (module doc; `trial` becomes the step redone
+    /// with it). Kept out of line: the rolling step's frame does not carry its states.
     #[inline(never)]
     pub(crate) fn flight_events(
         &self,
         start: &State<T, D>,
-        trial: State<T, D>,
+        trial: &mut State<T, D>,
         base_accel: T,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
-    ) -> Result<State<T, D>, Error> {
+    ) -> Result<(), Error> {
         let h = self.params.integrator.step;
         let rho = self.params.ball.path_radius();
         let mut tau = T::one();
         let mut event = None;
-        let end_rel = self.relative(&trial);
+        let end_rel = self.relative(trial);
         if end_rel.r > rho {
             let (r0, r1) = (self.relative(start), end_rel);
             let rate = |r: &Relative<T>| (r.d[0] * r.rate[0] + r.d[1] * r.rate[1]) / r.r;
             tau = hermite_root(r0.r - rho, rate(&r0) * h, r1.r - rho, rate(&r1) * h);
             event = Some(None);
         }
-        if let Some((side, inside, t)) = self.stop_crossing(start, &trial) {
+        if let Some((side, inside, t)) = self.stop_crossing(start, trial) {
             if event.is_none() || t < tau {
                 tau = t;
                 event = Some(Some((side, inside)));
             }
         }
         let Some(event) = event else {
-            return Ok(trial);
+            return Ok(());
         };
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
-        let mut mid = if h1 > h * lit(1e-6) {
-            let (m, s) = self.newmark(start, h1, accel_mid, ws, self.params.integrator.newton)?;
-            report.iterations += s.iterations;
-            report.increment = report.increment.max(s.increment);
-            m
-        } else {
-            *start
-        };
+        let mut mid = *start;
+        self.sub_step(start, h1, accel_mid, ws, report, &mut mid)?;
         mid.time = start.time + h1;
         match event {
             None => self.land(&mut mid, ws, report)?,
@@ -587,7 +566,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 report.impact = Some(impact);
             }
         }
-        self.flight_rest(&mid, h - h1, base_accel, ws, report)
+        self.flight_rest(&mid, h - h1, base_accel, ws, report, trial)
     }
 
     /// Factors the impulse metric of the mode `contact` at the configuration of `s`: the

@@ -321,26 +321,36 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub fn step(&mut self, base_accel: T) -> Result<StepReport<T>, Error> {
         self.check_input(base_accel)?;
         self.work.begin_step(self.sys.params.integrator.newton);
-        let (next, report) = self.sys.advance(&self.state, base_accel, &mut self.work)?;
+        let report = self
+            .sys
+            .advance(&mut self.state, base_accel, &mut self.work)?;
         self.work.commit();
-        self.state = next;
         Ok(report)
     }
 }
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
-    /// One step from `start` to the input `base_accel` at its end: the next state and the
-    /// report, or an error (nothing is changed but the workspace's scratch).
+    /// One step from `state` to the input `base_accel` at its end: `state` becomes the next
+    /// state and the report is returned, or an error (then `state` is unchanged, and nothing
+    /// else is but the workspace's scratch).
     fn advance(
         &self,
-        start: &State<T, D>,
+        state: &mut State<T, D>,
         base_accel: T,
         ws: &mut Workspace<T, D>,
-    ) -> Result<(State<T, D>, StepReport<T>), Error> {
+    ) -> Result<StepReport<T>, Error> {
         let h = self.params.integrator.step;
+        let start = &*state;
         // 1. Newmark over the whole step (the ball keeps its contact, on the track or flying).
-        let (trial, solved) =
-            self.newmark(start, h, base_accel, ws, self.params.integrator.newton)?;
+        let mut next = *start;
+        let solved = self.newmark(
+            start,
+            h,
+            base_accel,
+            ws,
+            self.params.integrator.newton,
+            &mut next,
+        )?;
         let mut report = StepReport {
             iterations: solved.iterations,
             increment: solved.increment,
@@ -348,23 +358,23 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             separation: None,
             landing: None,
         };
-        let mut next = if S::FLIGHT && start.contact == Contact::InFlight {
+        if S::FLIGHT && start.contact == Contact::InFlight {
             // 2'. In flight: a landing or a stop splits the step at the crossing.
-            self.flight_events(start, trial, base_accel, ws, &mut report)?
+            self.flight_events(start, &mut next, base_accel, ws, &mut report)?;
         } else {
             // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
-            let mut next = self.stop_events(start, trial, base_accel, ws, &mut report)?;
+            self.stop_events(start, &mut next, base_accel, ws, &mut report)?;
             // 3. Separation: a track that would pull the ball lets it fly.
             if self.flies() && report.impact.is_none() {
                 self.separation(start, &mut next, base_accel, ws, &mut report)?;
             }
-            next
-        };
+        }
         // 4. The clock: whole steps times h (a running sum of h drifts in f32).
         next.steps = start.steps.saturating_add(1);
         next.time = T::from_count(next.steps) * h;
         Self::is_finite(&next)?;
-        Ok((next, report))
+        *state = next;
+        Ok(report)
     }
 }
 

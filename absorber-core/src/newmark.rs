@@ -13,7 +13,7 @@
 //! Newmark's method (`α_m = α_f = 0`: `b = 0`, `κ = 1`; that path never touches `b`).
 
 use crate::error::Error;
-use crate::model::State;
+use crate::model::{State, StepReport};
 use crate::newton::{Solved, Workspace};
 use crate::params::{Integrator, NewtonKind};
 use crate::scalar::{lit, Real};
@@ -76,9 +76,31 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         AlphaRecursion::chain(&self.params.integrator, self.alpha.as_ref(), h)
     }
 
-    /// One step of length `h` from `s` to the input `base_accel` at its end; the ball's
-    /// contact is kept (a ball on a stop stays projected on it). Time and step count are the
-    /// caller's.
+    /// `out` = `s` advanced by a sub-step of length `len` to the input `accel` at its end (to
+    /// an event inside a step), or `s` itself when the sub-step is shorter than 10⁻⁶ of a step;
+    /// its Newton iterations join `report`. Time and step count are the caller's.
+    pub(crate) fn sub_step(
+        &self,
+        s: &State<T, D>,
+        len: T,
+        accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+        out: &mut State<T, D>,
+    ) -> Result<(), Error> {
+        if len > self.params.integrator.step * lit(1e-6) {
+            let solved = self.newmark(s, len, accel, ws, self.params.integrator.newton, out)?;
+            report.iterations += solved.iterations;
+            report.increment = report.increment.max(solved.increment);
+        } else {
+            *out = *s;
+        }
+        Ok(())
+    }
+
+    /// One step of length `h` from `s` to the input `base_accel` at its end, into `out` (left
+    /// as it was on error); the ball's contact is kept (a ball on a stop stays projected on
+    /// it). Time and step count are the caller's.
     pub(crate) fn newmark(
         &self,
         s: &State<T, D>,
@@ -86,7 +108,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         base_accel: T,
         ws: &mut Workspace<T, D>,
         kind: NewtonKind,
-    ) -> Result<(State<T, D>, Solved<T, D>), Error> {
+        out: &mut State<T, D>,
+    ) -> Result<Solved<T, D>, Error> {
         let i = &self.params.integrator;
         let half = lit::<T>(0.5);
         let pseudo = if self.alpha.is_some() {
@@ -122,30 +145,28 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         };
         let solved = self.newton(&p, s.a, ws, kind, true)?;
         let a = solved.x;
-        let mut next = State {
-            q: q_pred,
-            v: v_pred,
-            a,
-            pseudo_accel: a,
-            time: s.time,
-            steps: s.steps,
-            base_accel,
-            contact: s.contact,
-            flight: s.flight,
-        };
-        next.q.axpy(ch.c_q, &a, T::one());
-        next.v.axpy(ch.c_v, &a, T::one());
+        out.q = q_pred;
+        out.v = v_pred;
+        out.a = a;
+        out.pseudo_accel = a;
+        out.time = s.time;
+        out.steps = s.steps;
+        out.base_accel = base_accel;
+        out.contact = s.contact;
+        out.flight = s.flight;
+        out.q.axpy(ch.c_q, &a, T::one());
+        out.v.axpy(ch.c_v, &a, T::one());
         if let Some(g) = &self.alpha {
-            next.pseudo_accel = known;
-            next.pseudo_accel.axpy(g.ratio, &a, T::one());
+            out.pseudo_accel = known;
+            out.pseudo_accel.axpy(g.ratio, &a, T::one());
         }
-        match next.contact {
-            crate::model::Contact::OnStop(side) => self.hold_on_stop(&mut next, side),
+        match out.contact {
+            crate::model::Contact::OnStop(side) => self.hold_on_stop(out, side),
             crate::model::Contact::InFlight if S::FLIGHT => {
-                next.flight = self.fly(&s.flight, h, self.effective_gravity(base_accel));
+                out.flight = self.fly(&s.flight, h, self.effective_gravity(base_accel));
             }
             _ => {}
         }
-        Ok((next, solved))
+        Ok(solved)
     }
 }

@@ -29,43 +29,41 @@ use nalgebra::SVector;
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The stop events of a step from `start` whose trial end is `next`: an impact when the
-    /// ball crossed a stop, a release when a held ball would be pulled.
+    /// ball crossed a stop (`next` becomes the step redone with it), a release when a held ball
+    /// would be pulled.
     pub(crate) fn stop_events(
         &self,
         start: &State<T, D>,
-        next: State<T, D>,
+        next: &mut State<T, D>,
         base_accel: T,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
-    ) -> Result<State<T, D>, Error> {
+    ) -> Result<(), Error> {
         if !(S::STOPS && S::EXTRA_DOFS == 1) {
-            return Ok(next);
+            return Ok(());
         }
         match next.contact {
             Contact::Off => {
-                if self.relative_angle(&next).abs() > self.params.ball.stop_angle {
-                    return self.impact_step(start, &next, true, base_accel, ws, report);
+                if self.relative_angle(next).abs() > self.params.ball.stop_angle {
+                    *next = self.impact_step(start, next, true, base_accel, ws, report)?;
                 }
-                Ok(next)
             }
             // A ball that flew over a stop rolls on the arc beyond it: crossing back is an
             // impact on the stop's other face.
             Contact::Beyond if S::FLIGHT => {
-                let (_, a1) = self.branch_angles(start, &next);
+                let (_, a1) = self.branch_angles(start, next);
                 if a1.abs() < self.params.ball.stop_angle {
-                    return self.impact_step(start, &next, false, base_accel, ws, report);
+                    *next = self.impact_step(start, next, false, base_accel, ws, report)?;
                 }
-                Ok(next)
             }
             Contact::OnStop(side) => {
-                let mut next = next;
-                if side.sign::<T>() * self.contact_force(&next) > T::zero() {
+                if side.sign::<T>() * self.contact_force(next) > T::zero() {
                     next.contact = Contact::Off;
                 }
-                Ok(next)
             }
-            Contact::InFlight | Contact::Beyond => Ok(next), // (flight events: crate::flight)
+            Contact::InFlight | Contact::Beyond => {} // (flight events: crate::flight)
         }
+        Ok(())
     }
 
     /// The relative angles of two states on one branch: `α₀` in `(−π, π]` and `α₁` the nearest
@@ -119,14 +117,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
-        let mut mid = if h1 > h * lit(1e-6) {
-            let (m, s) = self.newmark(start, h1, accel_mid, ws, kind)?;
-            report.iterations += s.iterations;
-            report.increment = report.increment.max(s.increment);
-            m
-        } else {
-            *start
-        };
+        let mut mid = *start;
+        self.sub_step(start, h1, accel_mid, ws, report, &mut mid)?;
         mid.time = start.time + h1;
         let impact = self.impact(&mut mid, side, inside, ws)?;
         if !impact.stuck {
@@ -137,14 +129,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         // The velocity jumped: the generalized-α recursion restarts from the new acceleration.
         mid.pseudo_accel = mid.a;
         let rest = h - tau * h;
-        let mut end = if rest > h * lit(1e-6) {
-            let (e, s) = self.newmark(&mid, rest, base_accel, ws, kind)?;
-            report.iterations += s.iterations;
-            report.increment = report.increment.max(s.increment);
-            e
-        } else {
-            mid
-        };
+        let mut end = mid;
+        self.sub_step(&mid, rest, base_accel, ws, report, &mut end)?;
         // A second crossing within the same (remaining) step: the ball came straight back
         // onto the stop; end the step with it resting there (plastic).
         if inside && end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
