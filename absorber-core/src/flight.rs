@@ -573,13 +573,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// Newmark matrix `W = M + γhC + βh²K` of a whole step ([`ImpactModel::OverStep`], as the
     /// stops: the impulse spread over the step does not kick the housing's stiff end-rotation
     /// mode), or the mass matrix ([`ImpactModel::Instantaneous`]).
+    /// `scratch` takes the assembly's residual (not needed; no vector of its own in the frame).
     fn metric_factors(
         &self,
         s: &State<T, D>,
         contact: Contact,
         ws: &mut Workspace<T, D>,
+        scratch: &mut SVector<T, D>,
     ) -> Result<(), Error> {
-        let zero = SVector::zeros();
         let ch = if self.params.ball.impact_model == ImpactModel::OverStep {
             self.newmark_chain(self.params.integrator.step)
         } else {
@@ -589,18 +590,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 c_m: T::one(),
             }
         };
+        // Assembled at (q, v, a) of `s` as given to `refresh_at`; the problem's own chain
+        // origin is not used by an assembly.
         let p = Problem {
             q0: &s.q,
             v0: &s.v,
-            a0: &zero,
+            a0: &s.a,
             ch,
             c_pos: T::one(),
             g_eff: self.effective_gravity(s.base_accel),
             contact,
             plumb: false,
         };
-        let mut r = SVector::zeros();
-        self.refresh_at(&p, &[s.q, s.v, s.a], ws, &mut r)
+        self.refresh_at(&p, [&s.q, &s.v, &s.a], ws, scratch)
     }
 
     /// The landing at the crossing `s` (module doc): the centre put on the circle, then a
@@ -648,8 +650,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             pressed * self.params.integrator.step,
         );
         if bounces {
-            self.metric_factors(s, Contact::InFlight, ws)?;
             let mut y = SVector::<T, D>::zeros();
+            self.metric_factors(s, Contact::InFlight, ws, &mut y)?;
+            y.fill(T::zero());
             self.put_end(&mut y, [n[0], n[1], T::zero(), T::zero()]);
             ws.solve(&mut y)?;
             let k = T::one() / ball.mass + self.end_dot(&y, [n[0], n[1], T::zero(), T::zero()]);
@@ -691,11 +694,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             let s2 = a3 * a3 + a4 * a4;
             let w = rho * i.orbit_per_tilt * along / s2;
             let mut y = SVector::<T, D>::zeros();
+            self.metric_factors(s, s.contact, ws, &mut y)?;
+            y.fill(T::zero());
             self.put_end(&mut y, [delta[0], delta[1], -w * a4, w * a3]);
             if let Some(spin) = y.get_mut(Self::SPIN) {
                 *spin = -rho * i.orbit_per_spin * along;
             }
-            self.metric_factors(s, s.contact, ws)?;
             ws.solve(&mut y)?;
             s.v += y;
             let (_, after) = self.ball_centre(s);
@@ -752,8 +756,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             let a4 = x.q[3];
             let s2 = a3 * a3 + a4 * a4;
             let grad = [-cos / rel.r, -sin / rel.r, a4 / s2, -a3 / s2];
-            self.metric_factors(s, Contact::InFlight, ws)?;
             let mut y = SVector::<T, D>::zeros();
+            self.metric_factors(s, Contact::InFlight, ws, &mut y)?;
+            y.fill(T::zero());
             self.put_end(&mut y, grad);
             ws.solve(&mut y)?;
             let k = T::one() / (ball.mass * rel.r * rel.r) + self.end_dot(&y, grad);

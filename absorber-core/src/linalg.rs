@@ -140,7 +140,9 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
     /// Factors in place, `J = L U` without row exchanges (unit lower `L` below the diagonal,
     /// `U` on and above), for a matrix in the node envelope (module doc). `false` if a pivot
     /// is not finite or smaller than `ratio` times the largest entry below it in its column (the
-    /// matrix is then destroyed).
+    /// matrix is then destroyed). Not inlined: its registers and frame stay off the
+    /// assembly's call chain (the deepest stack of a step).
+    #[inline(never)]
     pub fn factor(&mut self, ratio: T) -> bool {
         for k in 0..D {
             // Column 4n + p: 7 − p rows below and 7 − p entries of U to the right.

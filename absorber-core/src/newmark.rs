@@ -20,7 +20,6 @@ use crate::scalar::{lit, Real};
 use crate::scene::Scene;
 use crate::system::{Problem, System};
 use crate::tip::Chain;
-use nalgebra::SVector;
 
 /// Constants of the generalized-α recursion `a_{n+1} = from_accel q̈_n + from_pseudo a_n +
 /// ratio q̈_{n+1}`, computed once from the parameters.
@@ -98,9 +97,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         Ok(())
     }
 
-    /// One step of length `h` from `s` to the input `base_accel` at its end, into `out` (left
-    /// as it was on error); the ball's contact is kept (a ball on a stop stays projected on
-    /// it). Time and step count are the caller's.
+    /// One step of length `h` from `s` to the input `base_accel` at its end, into `out`
+    /// (whose content on error is unspecified: every caller discards it); the ball's contact is
+    /// kept (a ball on a stop stays projected on it). Time and step count are the caller's.
+    /// The predictor, the known part of the generalized-α variable and the zero of the Newton
+    /// chain are built in `out`'s own vectors: no state-sized temporaries in the frame.
     pub(crate) fn newmark(
         &self,
         s: &State<T, D>,
@@ -117,26 +118,28 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         } else {
             &s.a
         };
-        let mut q_pred = s.q;
-        q_pred.axpy(h, &s.v, T::one());
-        q_pred.axpy(h * h * (half - i.beta), pseudo, T::one());
-        let mut v_pred = s.v;
-        v_pred.axpy(h * (T::one() - i.gamma), pseudo, T::one());
-        // Generalized-α: the known part b of a_{n+1} enters the predictor like a Newmark
-        // acceleration (module doc).
-        let mut known = SVector::<T, D>::zeros();
+        // Predictor: out.q, out.v.
+        out.q = s.q;
+        out.q.axpy(h, &s.v, T::one());
+        out.q.axpy(h * h * (half - i.beta), pseudo, T::one());
+        out.v = s.v;
+        out.v.axpy(h * (T::one() - i.gamma), pseudo, T::one());
+        // Generalized-α: the known part b of a_{n+1} (in out.pseudo_accel) enters the
+        // predictor like a Newmark acceleration (module doc).
+        out.pseudo_accel.fill(T::zero());
         if let Some(g) = &self.alpha {
+            let known = &mut out.pseudo_accel;
             known.axpy(g.from_accel, &s.a, T::zero());
             known.axpy(g.from_pseudo, &s.pseudo_accel, T::one());
-            q_pred.axpy(i.beta * h * h, &known, T::one());
-            v_pred.axpy(i.gamma * h, &known, T::one());
+            out.q.axpy(i.beta * h * h, &out.pseudo_accel, T::one());
+            out.v.axpy(i.gamma * h, &out.pseudo_accel, T::one());
         }
         let ch = self.newmark_chain(h);
-        let zero = SVector::zeros();
+        out.a.fill(T::zero());
         let p = Problem {
-            q0: &q_pred,
-            v0: &v_pred,
-            a0: &zero,
+            q0: &out.q,
+            v0: &out.v,
+            a0: &out.a,
             ch,
             c_pos: ch.c_q,
             g_eff: self.effective_gravity(base_accel),
@@ -144,21 +147,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             plumb: false,
         };
         let solved = self.newton(&p, s.a, ws, kind, true)?;
-        let a = solved.x;
-        out.q = q_pred;
-        out.v = v_pred;
-        out.a = a;
-        out.pseudo_accel = a;
+        let a = &solved.x;
+        out.a = *a;
         out.time = s.time;
         out.steps = s.steps;
         out.base_accel = base_accel;
         out.contact = s.contact;
         out.flight = s.flight;
-        out.q.axpy(ch.c_q, &a, T::one());
-        out.v.axpy(ch.c_v, &a, T::one());
-        if let Some(g) = &self.alpha {
-            out.pseudo_accel = known;
-            out.pseudo_accel.axpy(g.ratio, &a, T::one());
+        out.q.axpy(ch.c_q, a, T::one());
+        out.v.axpy(ch.c_v, a, T::one());
+        match &self.alpha {
+            Some(g) => out.pseudo_accel.axpy(g.ratio, a, T::one()),
+            None => out.pseudo_accel = *a,
         }
         match out.contact {
             crate::model::Contact::OnStop(side) => self.hold_on_stop(out, side),

@@ -191,7 +191,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     pub(crate) fn refresh_at(
         &self,
         p: &Problem<'_, T, D>,
-        qva: &[SVector<T, D>; 3],
+        qva: [&SVector<T, D>; 3],
         ws: &mut Workspace<T, D>,
         r: &mut SVector<T, D>,
     ) -> Result<(), Error> {
@@ -202,11 +202,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         slot.key = None;
         self.assemble_problem(p, qva, r, &mut slot.band);
         slot.pivots = if ws.pivot {
-            self.pivot_fallback(p, qva, r, slot, false)?
+            Some(Self::pivot_fallback(slot)?)
         } else if slot.band.factor(self.pivot_ratio) {
             None
         } else {
-            self.pivot_fallback(p, qva, r, slot, true)?
+            // The elimination gave up and destroyed the band: assemble it again.
+            self.assemble_problem(p, qva, r, &mut slot.band);
+            Some(Self::pivot_fallback(slot)?)
         };
         slot.key = Some(Key {
             c_q: p.ch.c_q,
@@ -216,38 +218,25 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// Residual of `p` at `qva` into `r` and its Newton matrix into `band`.
-    #[inline]
+    #[inline(always)]
     fn assemble_problem(
         &self,
         p: &Problem<'_, T, D>,
-        [q, v, a]: &[SVector<T, D>; 3],
+        qva: [&SVector<T, D>; 3],
         r: &mut SVector<T, D>,
         band: &mut BandMatrix<T, D>,
     ) {
-        self.residual_and_jacobian([q, v, a], p.g_eff, &p.ch, p.contact, p.plumb, r, band);
+        self.residual_and_jacobian(qva, p.g_eff, &p.ch, p.contact, p.plumb, r, band);
     }
 
     /// Factors the assembled matrix dense with partial pivoting: off the step path, or (rare)
-    /// when a band pivot was too small — then the elimination destroyed the band and it is
-    /// assembled again (`rebuild`). Not inlined: it keeps the dense matrix's code and frame off
-    /// the ordinary path.
+    /// when a band pivot was too small. Not inlined: it keeps the dense matrix's code off the
+    /// ordinary path (and its frame off the assembly's call chain).
     #[inline(never)]
     #[cold]
-    fn pivot_fallback(
-        &self,
-        p: &Problem<'_, T, D>,
-        qva: &[SVector<T, D>; 3],
-        r: &mut SVector<T, D>,
-        slot: &mut Factors<T, D>,
-        rebuild: bool,
-    ) -> Result<Option<[usize; D]>, Error> {
-        if rebuild {
-            self.assemble_problem(p, qva, r, &mut slot.band);
-        }
+    fn pivot_fallback(slot: &mut Factors<T, D>) -> Result<[usize; D], Error> {
         slot.band.write_dense(&mut slot.dense);
-        linalg::factor_pivoted(&mut slot.dense)
-            .map(Some)
-            .ok_or(Error::Singular)
+        linalg::factor_pivoted(&mut slot.dense).ok_or(Error::Singular)
     }
 
     /// Newton on `x` (from the guess `x`) for problem `p`. Convergence:
@@ -277,7 +266,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 let [q, v, a] = &qva;
                 self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut dx);
             } else {
-                self.refresh_at(p, &qva, ws, &mut dx)?;
+                let [q, v, a] = &qva;
+                self.refresh_at(p, [q, v, a], ws, &mut dx)?;
             }
             if !dx.as_slice().iter().all(|z| z.is_finite()) {
                 return Err(Error::NonFiniteState);

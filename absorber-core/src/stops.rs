@@ -199,7 +199,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         if towards > T::zero() {
             let e = if plastic { T::zero() } else { ball.restitution };
             let mut y = grad;
-            self.impulse_matrix(s, ws)?;
+            self.impulse_matrix(s, ws, &mut y)?;
+            y = grad;
             ws.solve(&mut y)?;
             let w = grad.dot(&y);
             if !is_positive(w) {
@@ -217,16 +218,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             Contact::Beyond
         };
         if plastic && inside {
-            // Stay on the stop if the contact force is compressive.
-            let mut held = *s;
-            held.contact = Contact::OnStop(side);
-            self.hold_on_stop(&mut held, side);
-            let acc = self.consistent_acceleration(&held, ws, self.params.integrator.newton)?;
-            held.a = acc.x;
-            held.pseudo_accel = held.a;
-            if side.sign::<T>() * self.contact_force(&held) <= T::zero() {
-                *s = held;
+            // Stay on the stop if the contact force is compressive. Tried on `s` itself (what
+            // holding changes is saved and put back otherwise: no second state in the frame).
+            let saved = (s.contact, s.a, s.pseudo_accel, Self::spin_of(s));
+            s.contact = Contact::OnStop(side);
+            self.hold_on_stop(s, side);
+            let acc = self.consistent_acceleration(s, ws, self.params.integrator.newton)?;
+            s.a = acc.x;
+            s.pseudo_accel = s.a;
+            if side.sign::<T>() * self.contact_force(s) <= T::zero() {
                 impact.stuck = true;
+            } else {
+                let (contact, a, pseudo_accel, spin) = saved;
+                (s.contact, s.a, s.pseudo_accel) = (contact, a, pseudo_accel);
+                Self::set_spin(s, spin);
             }
         }
         Ok(impact)
@@ -234,7 +239,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
 
     /// Makes the impulse metric the current factors: the step's Newmark matrix when it is
     /// there (over-step model), else a fresh one (or the mass matrix) at the impact state.
-    fn impulse_matrix(&self, s: &State<T, D>, ws: &mut Workspace<T, D>) -> Result<(), Error> {
+    /// `scratch` takes the assembly's residual (not needed; no vector of its own in the frame).
+    fn impulse_matrix(
+        &self,
+        s: &State<T, D>,
+        ws: &mut Workspace<T, D>,
+        scratch: &mut SVector<T, D>,
+    ) -> Result<(), Error> {
         let over_step = self.params.ball.impact_model == ImpactModel::OverStep;
         let ch = if over_step {
             self.newmark_chain(self.params.integrator.step)
@@ -249,19 +260,34 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             // The step's own W (an impact right at the step start reuses the trial's).
             return Ok(());
         }
-        let zero = SVector::zeros();
+        // Assembled at (q, v, a) of `s` as given to `refresh_at`; the problem's own chain
+        // origin is not used by an assembly.
         let p = Problem {
             q0: &s.q,
             v0: &s.v,
-            a0: &zero,
+            a0: &s.a,
             ch,
             c_pos: T::one(),
             g_eff: self.effective_gravity(s.base_accel),
             contact: Contact::Off,
             plumb: false,
         };
-        let mut r = SVector::zeros();
-        self.refresh_at(&p, &[s.q, s.v, s.a], ws, &mut r)
+        self.refresh_at(&p, [&s.q, &s.v, &s.a], ws, scratch)
+    }
+
+    /// The spin's position and rate `(φ, φ̇)` (zeros without a free ball).
+    fn spin_of(s: &State<T, D>) -> (T, T) {
+        (
+            s.q.get(Self::SPIN).copied().unwrap_or(T::zero()),
+            s.v.get(Self::SPIN).copied().unwrap_or(T::zero()),
+        )
+    }
+
+    /// Sets the spin's position and rate (no effect without a free ball).
+    fn set_spin(s: &mut State<T, D>, (q, v): (T, T)) {
+        if let (Some(x), Some(y)) = (s.q.get_mut(Self::SPIN), s.v.get_mut(Self::SPIN)) {
+            (*x, *y) = (q, v);
+        }
     }
 
     /// Projects a ball resting on a stop onto α = side·α_max: φ = ψ − (ρ/r_b) α, φ̇ = ψ̇, φ̈ = ψ̈
