@@ -66,8 +66,8 @@ pub use loads::{ArmParams, Loads, PointMass};
 pub use model::{Contact, Impact, Model, Side, State, StepReport};
 pub use outputs::ContactForces;
 pub use params::{
-    BallParams, BeamParams, Calibration, Damping, ImpactModel, Integrator, NewtonKind, Params,
-    TipParams,
+    BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,
+    NewtonKind, Params, TipParams,
 };
 pub use scalar::Real;
 pub use scene::{

@@ -49,6 +49,15 @@ pub enum Side {
 }
 
 impl Side {
+    /// The side of a relative angle: positive for `α > 0`, else negative.
+    pub(crate) fn of<T: Real>(alpha: T) -> Self {
+        if alpha > T::zero() {
+            Side::Positive
+        } else {
+            Side::Negative
+        }
+    }
+
     /// +1 or −1.
     pub fn sign<T: Real>(self) -> T {
         match self {

@@ -20,7 +20,7 @@
 use crate::error::Error;
 use crate::model::{Contact, Impact, Side, State, StepReport};
 use crate::newton::Workspace;
-use crate::params::ImpactModel;
+use crate::params::{EventLocation, ImpactModel};
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
 use crate::system::{Problem, System};
@@ -44,16 +44,27 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         match next.contact {
             Contact::Off => {
-                if self.relative_angle(next).abs() > self.params.ball.stop_angle {
-                    *next = self.impact_step(start, next, true, base_accel, ws, report)?;
+                let alpha = self.relative_angle(next);
+                if alpha.abs() > self.params.ball.stop_angle {
+                    if self.events_at_step_end() {
+                        let side = Side::of(alpha);
+                        self.impact_at_end(start, next, side, true, ws, report)?;
+                    } else {
+                        *next = self.impact_step(start, next, true, base_accel, ws, report)?;
+                    }
                 }
             }
             // A ball that flew over a stop rolls on the arc beyond it: crossing back is an
             // impact on the stop's other face.
             Contact::Beyond if S::FLIGHT => {
-                let (_, a1) = self.branch_angles(start, next);
+                let (a0, a1) = self.branch_angles(start, next);
                 if a1.abs() < self.params.ball.stop_angle {
-                    *next = self.impact_step(start, next, false, base_accel, ws, report)?;
+                    if self.events_at_step_end() {
+                        let side = Side::of(a0);
+                        self.impact_at_end(start, next, side, false, ws, report)?;
+                    } else {
+                        *next = self.impact_step(start, next, false, base_accel, ws, report)?;
+                    }
                 }
             }
             Contact::OnStop(side) => {
@@ -63,6 +74,40 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
             Contact::InFlight | Contact::Beyond => {} // (flight events: crate::flight)
         }
+        Ok(())
+    }
+
+    /// Events are put at the end of their step ([`EventLocation::StepEnd`]).
+    #[inline]
+    pub(crate) fn events_at_step_end(&self) -> bool {
+        self.params.integrator.events == EventLocation::StepEnd
+    }
+
+    /// The impact of a step whose trial end `s` crossed a stop, put at the step's end
+    /// ([`EventLocation::StepEnd`]): `s` projected onto the stop, the impulse in the trial's
+    /// own Newton matrix (the over-step metric, already factored), and the consistent
+    /// acceleration. Kept out of line (rare).
+    #[inline(never)]
+    #[cold]
+    fn impact_at_end(
+        &self,
+        start: &State<T, D>,
+        s: &mut State<T, D>,
+        side: Side,
+        inside: bool,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<(), Error> {
+        s.time = start.time + self.params.integrator.step;
+        let impact = self.impact(s, side, inside, ws)?;
+        if !impact.stuck {
+            let acc = self.consistent_acceleration(s, ws, self.params.integrator.newton)?;
+            report.iterations += acc.iterations;
+            s.a = acc.x;
+        }
+        // The velocity jumped: the generalized-α recursion restarts from the new acceleration.
+        s.pseudo_accel = s.a;
+        report.impact = Some(impact);
         Ok(())
     }
 

@@ -44,3 +44,43 @@ fn time_is_steps_times_h_through_stop_impacts_and_the_tip_peaks_at_the_forcing_f
     // 40 s of record resolve 1/40 = 0.025 Hz: the peak lies within half a bin of the forcing.
     assert!((peak - f).abs() <= 0.0125, "peak at {peak} Hz");
 }
+
+/// Stop impacts put at the end of their step (`EventLocation::StepEnd`) come at the end of the
+/// step that contains the crossing: the ball released from −62° (no excitation; trapezoidal,
+/// h = 1 ms, so that it keeps the energy to reach the +65° stop) hits the stop first at the
+/// crossing time `t_c` in the default mode, and at the end of the step containing `t_c` in
+/// step-end mode (the two runs are identical until then).
+#[test]
+fn step_end_impacts_are_late_by_less_than_one_step() {
+    use absorber_core::{EventLocation, FreeBall, Model};
+    let first_impact = |events: EventLocation| {
+        let mut p = Params::<f64>::default();
+        p.integrator.events = events;
+        p.integrator.gamma = 0.5;
+        p.integrator.beta = 0.25;
+        p.integrator.step = 1e-3;
+        p.ball.initial_angle = -62f64.to_radians();
+        p.ball.flight = false;
+        let h = p.integrator.step;
+        let mut m = Model::<f64, FreeBall, 3, 13>::at_rest(p, 0.0).expect("valid");
+        for _ in 0..10_000 {
+            if let Some(i) = m.step(0.0).expect("step").impact {
+                return (i.time, m.time(), h);
+            }
+        }
+        panic!("no impact in 10 s");
+    };
+    let (t_c, end_c, h) = first_impact(EventLocation::Crossing);
+    let (t_e, end_e, _) = first_impact(EventLocation::StepEnd);
+    println!("crossing at {t_c:.6} s (step ends {end_c:.6} s), step-end impact at {t_e:.6} s");
+    assert!(
+        t_c < end_c && end_c - t_c < h,
+        "the crossing lies inside its step"
+    );
+    assert_eq!(end_e, end_c, "the same step");
+    assert!(
+        (t_e - end_e).abs() < 1e-12,
+        "the step-end impact is at the step's end"
+    );
+    assert!(t_e - t_c > 0.0 && t_e - t_c < h);
+}

@@ -114,6 +114,17 @@
 #define ABSORBER_NEWTON_MODIFIED 2
 
 /**
+ * `integrator.events`: a stop impact splits the step at its crossing (default).
+ */
+#define ABSORBER_EVENTS_CROSSING 0
+
+/**
+ * `integrator.events`: a stop impact is put at the end of its step (bounded cost per sample;
+ * late by less than a step; flight events keep their crossing).
+ */
+#define ABSORBER_EVENTS_STEP_END 1
+
+/**
  * `threshold_rule` of the monitor: cycles at or below the CAFT do no damage (default).
  */
 #define ABSORBER_THRESHOLD_CUTOFF 0
@@ -328,6 +339,10 @@ typedef struct AbsorberIntegratorParams {
      * 1: accept the iterate after the budget instead of failing; 0: fail (default).
      */
     uint8_t accept_after_budget;
+    /**
+     * `ABSORBER_EVENTS_CROSSING` (default) or `ABSORBER_EVENTS_STEP_END`.
+     */
+    uint32_t events;
 } AbsorberIntegratorParams;
 
 /**

@@ -92,7 +92,8 @@ use absorber_core::monitor::{
 };
 use absorber_core::scalar::{lit, Real};
 use absorber_core::{
-    Contact, Error, Impact, ImpactModel, Model, NewtonKind, Params, Scene, Side, StepReport,
+    Contact, Error, EventLocation, Impact, ImpactModel, Model, NewtonKind, Params, Scene, Side,
+    StepReport,
 };
 use core::ffi::{c_char, c_void};
 use core::mem::{align_of, size_of};
@@ -159,6 +160,11 @@ pub const ABSORBER_NEWTON_PER_STEP: u32 = 0;
 pub const ABSORBER_NEWTON_FULL: u32 = 1;
 /// `integrator.newton`: modified Newton (matrix kept across steps).
 pub const ABSORBER_NEWTON_MODIFIED: u32 = 2;
+/// `integrator.events`: a stop impact splits the step at its crossing (default).
+pub const ABSORBER_EVENTS_CROSSING: u32 = 0;
+/// `integrator.events`: a stop impact is put at the end of its step (bounded cost per sample;
+/// late by less than a step; flight events keep their crossing).
+pub const ABSORBER_EVENTS_STEP_END: u32 = 1;
 /// `threshold_rule` of the monitor: cycles at or below the CAFT do no damage (default).
 pub const ABSORBER_THRESHOLD_CUTOFF: u32 = 0;
 /// `threshold_rule`: the S–N line continues below the CAFT.
@@ -309,6 +315,8 @@ pub struct AbsorberIntegratorParams {
     pub newton: u32,
     /// 1: accept the iterate after the budget instead of failing; 0: fail (default).
     pub accept_after_budget: u8,
+    /// `ABSORBER_EVENTS_CROSSING` (default) or `ABSORBER_EVENTS_STEP_END`.
+    pub events: u32,
 }
 
 /// Structural damping.
@@ -995,6 +1003,16 @@ fn to_params<T: Real>(p: &AbsorberParams) -> Result<Params<T>, Error> {
         1 => true,
         _ => return Err(invalid("integrator.accept_after_budget", "must be 0 or 1")),
     };
+    q.integrator.events = match i.events {
+        ABSORBER_EVENTS_CROSSING => EventLocation::Crossing,
+        ABSORBER_EVENTS_STEP_END => EventLocation::StepEnd,
+        _ => {
+            return Err(invalid(
+                "integrator.events",
+                "must be ABSORBER_EVENTS_CROSSING or ABSORBER_EVENTS_STEP_END",
+            ))
+        }
+    };
     q.damping.stiffness_proportional = lit(p.damping.stiffness_proportional);
     q.gravity = lit(p.gravity);
     q.integrator.alpha_m = lit(p.alpha_m);
@@ -1113,6 +1131,10 @@ pub unsafe extern "C" fn absorber_params_default(params: *mut AbsorberParams) ->
                 NewtonKind::PerStep => ABSORBER_NEWTON_PER_STEP,
             },
             accept_after_budget: u8::from(d.integrator.accept_after_budget),
+            events: match d.integrator.events {
+                EventLocation::Crossing => ABSORBER_EVENTS_CROSSING,
+                EventLocation::StepEnd => ABSORBER_EVENTS_STEP_END,
+            },
         },
         damping: AbsorberDampingParams {
             stiffness_proportional: d.damping.stiffness_proportional,

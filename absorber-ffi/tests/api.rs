@@ -352,6 +352,10 @@ fn a_bad_parameter_is_refused_with_the_name_of_its_field() {
     p.ball.impact_model = 7;
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "ball.impact_model");
+    let mut p = defaults();
+    p.integrator.events = 2;
+    let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
+    assert_eq!(text(&e.field), "integrator.events");
     // The beam-only scene does not validate the ball (as the core).
     let mut p = defaults();
     p.ball.mass = -1.0;

@@ -171,19 +171,56 @@ impl<M: Sim> Sim for InFlight<M> {
     }
 }
 
-/// The same model stepped with modified Newton (`NewtonKind::Modified`: the factored Newton
-/// matrix is kept across iterations and steps), otherwise `Params::default()`.
-pub struct ModifiedNewton<M>(pub M);
+/// A change of `Params::default()` that a firmware scene runs with.
+pub trait Config {
+    /// Scene name as printed.
+    const NAME: &'static str;
+    /// Applies the change.
+    fn apply(p: &mut Params<f32>);
+}
 
-impl<S: Scene, const N: usize, const D: usize> Sim for ModifiedNewton<Model<f32, S, N, D>> {
+/// Modified Newton (`NewtonKind::Modified`: the factored Newton matrix is kept across
+/// iterations and steps).
+pub struct Modified;
+
+impl Config for Modified {
+    const NAME: &'static str = "modified Newton";
+    fn apply(p: &mut Params<f32>) {
+        p.integrator.newton = absorber_core::NewtonKind::Modified;
+    }
+}
+
+/// Stop impacts put at the end of their step (`EventLocation::StepEnd`: no sub-steps, the
+/// bounded worst case).
+pub struct StepEndImpacts;
+
+impl Config for StepEndImpacts {
+    const NAME: &'static str = "stop impacts at the step end";
+    fn apply(p: &mut Params<f32>) {
+        p.integrator.events = absorber_core::EventLocation::StepEnd;
+    }
+}
+
+/// The model with `Params::default()` changed by `C`.
+pub struct Configured<M, C>(pub M, core::marker::PhantomData<C>);
+
+/// The model stepped with modified Newton, otherwise `Params::default()`.
+pub type ModifiedNewton<M> = Configured<M, Modified>;
+
+/// The model with stop impacts at the step end, otherwise `Params::default()`.
+pub type StepEnd<M> = Configured<M, StepEndImpacts>;
+
+impl<S: Scene, const N: usize, const D: usize, C: Config> Sim
+    for Configured<Model<f32, S, N, D>, C>
+{
     fn name() -> &'static str {
-        "modified Newton"
+        C::NAME
     }
 
     fn init() -> Result<Self, Error> {
         let mut p = Params::default();
-        p.integrator.newton = absorber_core::NewtonKind::Modified;
-        Model::at_rest(p, 0.0).map(ModifiedNewton)
+        C::apply(&mut p);
+        Model::at_rest(p, 0.0).map(|m| Configured(m, core::marker::PhantomData))
     }
 
     #[inline(never)]

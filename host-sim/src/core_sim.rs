@@ -156,6 +156,7 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             max_iterations: p.integrator.max_iterations,
             newton: p.integrator.newton,
             accept_after_budget: p.integrator.accept_after_budget,
+            events: p.integrator.events,
         },
         damping: Damping {
             stiffness_proportional: p.damping.stiffness_proportional as f32,

@@ -21,6 +21,13 @@ pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simula
             if f.precision != Precision::F64 {
                 bail!("the full solver is f64 only (use --precision f64 or --solver core)");
             }
+            if params.integrator.events != absorber_core::EventLocation::Crossing {
+                bail!(
+                    "`integrator.events = \"step-end\"` is an option of the embedded core; the \
+                     full solver, the reference, always splits the step at an event (use \
+                     --solver core, or events = \"crossing\")"
+                );
+            }
             let kind = match f.kind {
                 Kind::Beam => SceneKind::BeamOnly,
                 Kind::Tip => SceneKind::TipMass,

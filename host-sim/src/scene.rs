@@ -29,8 +29,8 @@
 //! ```
 
 use absorber_core::{
-    BallParams, BeamParams, Calibration, Damping, ImpactModel, Integrator, NewtonKind, Params,
-    TipParams,
+    BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,
+    NewtonKind, Params, TipParams,
 };
 use anyhow::{anyhow, bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -268,6 +268,21 @@ pub struct IntegratorSection {
     pub newton: NewtonSetting,
     /// Accept the iterate after `max_iterations` instead of failing the step.
     pub accept_after_budget: bool,
+    /// Where an event inside a step goes: `crossing` (the step split at it, exact timing; the
+    /// default) or `step-end` (at the end of its step: bounded cost, late by less than a step;
+    /// the embedded core only).
+    pub events: EventSetting,
+}
+
+/// Scene-file spelling of [`absorber_core::EventLocation`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EventSetting {
+    /// At the crossing inside the step (default).
+    #[default]
+    Crossing,
+    /// At the end of the step in which the event happened.
+    StepEnd,
 }
 
 /// Scene-file spelling of the time integration scheme ([`absorber_core::Integrator`]).
@@ -580,6 +595,10 @@ impl Default for IntegratorSection {
                 NewtonKind::Modified => NewtonSetting::Modified,
             },
             accept_after_budget: p.accept_after_budget,
+            events: match p.events {
+                EventLocation::Crossing => EventSetting::Crossing,
+                EventLocation::StepEnd => EventSetting::StepEnd,
+            },
         }
     }
 }
@@ -852,6 +871,10 @@ impl Scene {
                     NewtonSetting::Modified => NewtonKind::Modified,
                 };
                 i.accept_after_budget = f.integrator.accept_after_budget;
+                i.events = match f.integrator.events {
+                    EventSetting::Crossing => EventLocation::Crossing,
+                    EventSetting::StepEnd => EventLocation::StepEnd,
+                };
                 let fi = &f.integrator;
                 match (fi.scheme, fi.rho_inf) {
                     (SchemeSetting::Newmark, None) => {}
