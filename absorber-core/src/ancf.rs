@@ -525,10 +525,14 @@ impl<T: Real> AxialQuadrature<T> {
             }
             *rr_p = [*w * (r1 * r1 + eps), *w * (r1 * r2), *w * (r2 * r2 + eps)];
         }
-        let mut blocks = [[[T::zero(); 3]; 4]; 4];
-        for (i, row) in blocks.iter_mut().enumerate() {
-            for (j, block) in row.iter_mut().enumerate().skip(i) {
+        // Built in place (no zeroed array first): the blocks below the diagonal stay zero and
+        // are never read.
+        let blocks = core::array::from_fn(|i| {
+            core::array::from_fn(|j| {
                 let mut acc = [T::zero(); 3];
+                if j < i {
+                    return acc;
+                }
                 for (sx, rr_p) in self.sx.iter().zip(rr.iter()) {
                     let (Some(si), Some(sj)) = (sx.get(i), sx.get(j)) else {
                         continue;
@@ -538,9 +542,9 @@ impl<T: Real> AxialQuadrature<T> {
                         *b += sij * *r;
                     }
                 }
-                *block = acc;
-            }
-        }
+                acc
+            })
+        });
         (f, blocks)
     }
 
