@@ -7,7 +7,8 @@
 //! `beta=`, `damping=` (stiffness-proportional c \[s\]), `tolerance=`, `newton=per-step|full|
 //! modified`, `budget=K` (exactly K iterations, the iterate accepted), `seconds=` (simulated),
 //! `frequency=` \[Hz\], `amplitude=` \[m\] (harmonic base motion, the paper scene's by default),
-//! `bending=`, `axial=`, `lumping=` (`absorber_core::Calibration`; identity by default).
+//! `bending=`, `axial=`, `lumping=` (`absorber_core::Calibration`; identity by default),
+//! `events=crossing|step-end` (`absorber_core::EventLocation`).
 //! Unknown keys and bad values are errors (exit 4), never ignored.
 //!
 //! Every step goes through [`cost_step`], never inlined, one symbol for every variant, so the
@@ -17,7 +18,7 @@
 use crate::{error_name, Fnv};
 use absorber_core::scalar::{lit, to_f64};
 use absorber_core::{
-    Error, FreeBallModel, LockedBallModel, Model, NewtonKind, Params, Real, Scene,
+    Error, EventLocation, FreeBallModel, LockedBallModel, Model, NewtonKind, Params, Real, Scene,
 };
 use core::fmt::Write;
 
@@ -38,6 +39,7 @@ pub struct Config {
     frequency: f64,
     amplitude: f64,
     calibration: [f64; 3],
+    events: EventLocation,
 }
 
 impl Default for Config {
@@ -58,6 +60,7 @@ impl Default for Config {
             frequency: 4.13,
             amplitude: 0.5e-3,
             calibration: [1.0, 1.0, 0.0],
+            events: p.integrator.events,
         }
     }
 }
@@ -115,6 +118,13 @@ impl Config {
             "bending" => self.calibration[0] = num()?,
             "axial" => self.calibration[1] = num()?,
             "lumping" => self.calibration[2] = num()?,
+            "events" => {
+                self.events = match value {
+                    "crossing" => EventLocation::Crossing,
+                    "step-end" => EventLocation::StepEnd,
+                    _ => return Err(key),
+                }
+            }
             _ => return Err(key),
         }
         Ok(())
@@ -128,6 +138,7 @@ impl Config {
         i.beta = lit(self.beta);
         i.tolerance = lit(self.tolerance);
         i.newton = self.newton;
+        i.events = self.events;
         if let Some(k) = self.budget {
             i.max_iterations = k;
             i.accept_after_budget = true;

@@ -80,6 +80,10 @@ pub struct Config {
     pub rule: Rule,
     /// Calibration factors (bending, axial, lumped fraction; [`calibrated`]) or none.
     pub calibration: Option<[f64; 3]>,
+    /// Stop impacts at the end of their step (`EventLocation::StepEnd`) instead of their
+    /// crossing.
+    #[serde(default)]
+    pub step_end: bool,
 }
 
 impl Config {
@@ -92,6 +96,7 @@ impl Config {
         tolerance: 1e-5,
         rule: Rule::Matched,
         calibration: None,
+        step_end: false,
     };
 
     /// The same with other fields.
@@ -119,7 +124,7 @@ impl Config {
             Rule::Paper => " paper-γ",
         };
         format!(
-            "N{} h{} {} {}{}{}",
+            "N{} h{} {} {}{}{}{}",
             self.elements,
             hs,
             if self.f32 { "f32" } else { "f64" },
@@ -129,7 +134,8 @@ impl Config {
                 " calibrated"
             } else {
                 ""
-            }
+            },
+            if self.step_end { " step-end" } else { "" }
         )
     }
 
@@ -159,6 +165,9 @@ impl Config {
                 p.integrator.accept_after_budget = true;
             }
             Newton::Modified => p.integrator.newton = NewtonKind::Modified,
+        }
+        if self.step_end {
+            p.integrator.events = absorber_core::EventLocation::StepEnd;
         }
         p
     }
@@ -192,6 +201,9 @@ impl Config {
         }
         if let Some([b, x, l]) = self.calibration {
             a.push_str(&format!(" bending={b:?} axial={x:?} lumping={l:?}"));
+        }
+        if self.step_end {
+            a.push_str(" events=step-end");
         }
         Some(a)
     }
@@ -534,6 +546,7 @@ pub fn reference_config(n: usize, h: f64) -> Config {
         tolerance: 1e-10,
         rule: Rule::Matched,
         calibration: None,
+        step_end: false,
     }
 }
 
