@@ -21,7 +21,7 @@ SCENES = [("free", "free ball, stops, flight (`FreeBallModel<f32, 3, 13>`)"),
           ("free-n6", "free ball, stops, N = 6 (`FreeBallModel<f32, 6, 25>`)"),
           ("beam", "beam only (`BeamModel<f32, 3, 12>`)"),
           ("locked", "locked ball (`LockedBallModel<f32, 3, 12>`)"),
-          ("estimator", "mast-arm estimator: `Arm<BeamOnly>` model + `Estimator::update` (h = 10 ms)")]
+          ("estimator", "mast-arm monitor: `Arm<BeamOnly>` model + `Estimator::update` + `StressDamage::push` (h = 10 ms)")]
 PROFILES = [("fw", "opt-level 3, fat LTO"), ("fw-size", "opt-level \"s\", fat LTO")]
 MHZ = 168.0
 H = 0.003

@@ -2,20 +2,26 @@
 //! `Arm<BeamOnly>`, N = 3, f32, the twin experiment's calibrated model and gain from
 //! [`crate::estimator_gain`]) fed every sample a synthetic tip accelerometer reading: 1 m/s² at
 //! the arm's 1.03 Hz plus a 20 mg bias, computed in `f32` with `libm` (the same on the host and
-//! the target). `Sim::step` is one `Estimator::update`: the model step with the estimated load,
-//! the innovation and the correction.
+//! the target). `Sim::step` is one sample of the monitor: `Estimator::update` (the model step
+//! with the estimated load, the innovation and the correction), then the estimated root stress
+//! into the fatigue counter (`StressDamage`: rainflow and Miner on the arm's detail category).
 
 use crate::estimator_gain as g;
 use crate::Sim;
 use absorber_core::estimator::{Estimator, Gain};
 use absorber_core::loads::{ArmParams, PointMass, MAX_POINT_MASSES};
 use absorber_core::monitor::stress::RootSection;
+use absorber_core::monitor::StressDamage;
 use absorber_core::{Arm, BeamOnly, Error, Model, Params, StepReport};
 use nalgebra::SVector;
 
-/// The estimator under test.
+/// Stress points the fatigue counter keeps (the rainflow residue), fixed at compile time.
+pub const RESIDUE: usize = 128;
+
+/// The estimator and the fatigue counter fed by its root stress.
 pub struct EstimatorSim {
     est: Estimator<f32, Arm<BeamOnly>, 3, 12>,
+    damage: StressDamage<f32, RESIDUE>,
     k: u32,
 }
 
@@ -97,7 +103,8 @@ impl Sim for EstimatorSim {
         let mut est = Estimator::new(model, gain(), section, g::RANGE)?;
         let h = est.model().params().integrator.step;
         est.initialize_bias(0.0, tip_accel(0, h))?;
-        Ok(Self { est, k: 0 })
+        let damage = StressDamage::new(g::CATEGORY)?;
+        Ok(Self { est, damage, k: 0 })
     }
 
     #[inline(never)]
@@ -105,6 +112,7 @@ impl Sim for EstimatorSim {
         let k = self.k.wrapping_add(1);
         let y = tip_accel(k, self.h());
         let e = self.est.update(base_accel, y)?;
+        self.damage.push(self.est.root_stress(), &mut |_| {})?;
         self.k = k;
         Ok(e.report)
     }
@@ -125,11 +133,15 @@ impl Sim for EstimatorSim {
         self.est.model().static_tip_deflection()
     }
 
-    /// The model's state, then the load and bias estimates and the root stress.
+    /// The model's state, then the load and bias estimates, the root stress and the Miner
+    /// damage so far (extended and cutoff).
     fn state_words(&self, f: &mut dyn FnMut(u32)) {
         self.est.model().state_words(f);
         f(self.est.load().to_bits());
         f(self.est.bias().to_bits());
         f(self.est.root_stress().to_bits());
+        let (extended, cutoff) = self.damage.damage();
+        f(extended.to_bits());
+        f(cutoff.to_bits());
     }
 }

@@ -16,6 +16,9 @@ pub const POINT_MASSES: [(f32, f32); 6] = [(f32::from_bits(0x40e00000), f32::fro
 pub const SECTION: [f32; 3] = [f32::from_bits(0x4b3c0022), f32::from_bits(0x50f5de81), f32::from_bits(0x3e28f5c3)];
 /// Sensor range \[m/s²\].
 pub const RANGE: f32 = f32::from_bits(0x419ce80a);
+/// AASHTO detail category of the root (fatigue).
+pub const CATEGORY: absorber_core::monitor::DetailCategory =
+    absorber_core::monitor::DetailCategory::EPrime;
 /// Gain rows: q, v, a, pseudo_accel.
 pub const GAIN_Q: [f32; 12] = [f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000)];
 pub const GAIN_V: [f32; 12] = [f32::from_bits(0xb5a5d218), f32::from_bits(0xb8320027), f32::from_bits(0xb4e7cf25), f32::from_bits(0xb76c728d), f32::from_bits(0xb784bf70), f32::from_bits(0xba0a80ac), f32::from_bits(0xb7079dd3), f32::from_bits(0xb98a4037), f32::from_bits(0x391abc28), f32::from_bits(0x3b86b1af), f32::from_bits(0x38f1be83), f32::from_bits(0x3b55ad2c)];

@@ -13,8 +13,8 @@ use crate::scene::Scene;
 use crate::wind::{LoadModel, Rng};
 use absorber_core::estimator::{Estimator, Gain};
 use absorber_core::loads::{arm_section, ArmParams, Loads};
-use absorber_core::monitor::fatigue::{DetailCategory, Miner, ThresholdRule};
-use absorber_core::monitor::rainflow::{Cycle, Rainflow};
+use absorber_core::monitor::fatigue::{DetailCategory, StressDamage};
+use absorber_core::monitor::rainflow::Cycle;
 use absorber_core::monitor::stress::{root_reaction_moment, RootSection};
 use absorber_core::{Arm, BeamOnly, Model, Params};
 use anyhow::{anyhow, bail, Result};
@@ -293,41 +293,33 @@ pub struct TwinSeries {
     pub load: Vec<f64>,
 }
 
+/// The core's fatigue pipeline ([`StressDamage`], as in the firmware) plus the ranges it
+/// counted, for the histograms.
 struct Damage {
-    rainflow: Rainflow<f64, 512>,
-    extended: Miner<f64>,
-    cutoff: Miner<f64>,
+    counter: StressDamage<f64, 512>,
     ranges: Vec<(f64, f64)>,
 }
 
 impl Damage {
     fn new(category: DetailCategory) -> Result<Self> {
         Ok(Self {
-            rainflow: Rainflow::new(0.0).map_err(core)?,
-            extended: Miner::new(category.curve(ThresholdRule::Extended)).map_err(core)?,
-            cutoff: Miner::new(category.curve(ThresholdRule::Cutoff)).map_err(core)?,
+            counter: StressDamage::new(category).map_err(core)?,
             ranges: Vec::new(),
         })
     }
     fn push(&mut self, x: f64) -> Result<()> {
-        let (e, c, r) = (&mut self.extended, &mut self.cutoff, &mut self.ranges);
-        self.rainflow
-            .push(x, &mut |cy: Cycle<f64>| {
-                e.add(&cy);
-                c.add(&cy);
-                r.push((cy.range, cy.count()));
-            })
+        let r = &mut self.ranges;
+        self.counter
+            .push(x, &mut |cy: &Cycle<f64>| r.push((cy.range, cy.count())))
             .map_err(core)
     }
     fn finish(mut self) -> (f64, f64, Vec<(f64, f64)>) {
-        let (e, c) = (
-            self.extended.with_residue(&self.rainflow),
-            self.cutoff.with_residue(&self.rainflow),
-        );
+        let (e, c) = self.counter.damage();
         let r = &mut self.ranges;
-        self.rainflow
+        self.counter
+            .rainflow()
             .residue(&mut |cy: Cycle<f64>| r.push((cy.range, cy.count())));
-        (e.damage(), c.damage(), self.ranges)
+        (e, c, self.ranges)
     }
 }
 
@@ -704,6 +696,7 @@ pub fn firmware_constants(scene: &Scene) -> Result<String> {
         .sensor
         .ok_or_else(|| anyhow!("the scene has no `[sensor]`"))?;
     let arm = arm_file.params()?;
+    let category = arm_file.detail_category()?;
     let params = scene.params()?;
     let f_truth = {
         let mut pt = params;
@@ -795,11 +788,15 @@ pub fn firmware_constants(scene: &Scene) -> Result<String> {
         "/// Root section: E·I, E·c, c.\n\
          pub const SECTION: [f32; 3] = [{}, {}, {}];\n\
          /// Sensor range \\[m/s²\\].\n\
-         pub const RANGE: f32 = {};\n",
+         pub const RANGE: f32 = {};\n\
+         /// AASHTO detail category of the root (fatigue).\n\
+         pub const CATEGORY: absorber_core::monitor::DetailCategory =\n    \
+         absorber_core::monitor::DetailCategory::{:?};\n",
         b(s.bending_rigidity),
         b(s.stress_per_curvature),
         b(s.extreme_fibre),
-        b((sensor.range_g * g0) as f32)
+        b((sensor.range_g * g0) as f32),
+        category
     ));
     o.push_str(&format!(
         "/// Gain rows: q, v, a, pseudo_accel.\n\

@@ -349,3 +349,50 @@ impl<T: Real> Miner<T> {
         }
     }
 }
+
+/// The monitor's fatigue pipeline on a stress history that comes from elsewhere — the root
+/// stress of the estimator ([`crate::estimator`]) — one sample at a time: rainflow counting
+/// ([`Rainflow`], ASTM E1049 four-point) and Miner's rule on the S–N curve of a detail category
+/// (AASHTO LRFD-LTS §11.9). The host's twin experiment and the firmware count with it alike.
+/// Memory: `CAP` stress points, fixed at compile time.
+#[derive(Clone, Debug)]
+pub struct StressDamage<T, const CAP: usize> {
+    rainflow: Rainflow<T, CAP>,
+    miner: Miner<T>,
+}
+
+impl<T: Real, const CAP: usize> StressDamage<T, CAP> {
+    /// Empty, on the S–N curve of `category` (both threshold rules are reported).
+    pub fn new(category: DetailCategory) -> Result<Self, Error> {
+        Ok(Self {
+            rainflow: Rainflow::new(T::zero())?,
+            miner: Miner::new(category.curve(ThresholdRule::Cutoff))?,
+        })
+    }
+
+    /// Adds one stress sample \[Pa\]; every cycle it closes is counted and handed to
+    /// `on_cycle`. A non-finite sample is an error and counts nothing.
+    pub fn push(&mut self, stress: T, on_cycle: &mut impl FnMut(&Cycle<T>)) -> Result<(), Error> {
+        let miner = &mut self.miner;
+        self.rainflow.push(stress, &mut |c| {
+            miner.add(&c);
+            on_cycle(&c);
+        })
+    }
+
+    /// Miner damage so far, the open residue counted as half cycles: `(extended, cutoff)` —
+    /// the S–N line continued below the constant-amplitude fatigue threshold, and cycles below
+    /// it doing no damage.
+    pub fn damage(&self) -> (T, T) {
+        let m = self.miner.with_residue(&self.rainflow);
+        (
+            m.damage_with(ThresholdRule::Extended),
+            m.damage_with(ThresholdRule::Cutoff),
+        )
+    }
+
+    /// The rainflow counter (its residue: the cycles not closed yet).
+    pub fn rainflow(&self) -> &Rainflow<T, CAP> {
+        &self.rainflow
+    }
+}

@@ -48,7 +48,7 @@ pub mod indicators;
 pub mod rainflow;
 pub mod stress;
 
-pub use fatigue::{DetailCategory, FatigueSummary, Miner, SnCurve, ThresholdRule};
+pub use fatigue::{DetailCategory, FatigueSummary, Miner, SnCurve, StressDamage, ThresholdRule};
 pub use impacts::ImpactLog;
 pub use indicators::{IndicatorValues, Indicators, Sample, TwinTip, TwinValue};
 pub use rainflow::{Cycle, Rainflow, TurningPoints};
