@@ -568,6 +568,7 @@ fn cast_params(p: &Params<f64>) -> Params<f32> {
     q.integrator.max_iterations = i.max_iterations;
     q.integrator.newton = i.newton;
     q.integrator.accept_after_budget = i.accept_after_budget;
+    q.integrator.events = i.events;
     q.calibration.bending_stiffness = c(p.calibration.bending_stiffness);
     q.calibration.axial_stiffness = c(p.calibration.axial_stiffness);
     q.calibration.mass_lumping = c(p.calibration.mass_lumping);
