@@ -104,7 +104,8 @@ pub enum Command {
 /// `estimate`.
 #[derive(Args, Debug)]
 pub struct EstimateArgs {
-    /// Scene TOML file with `[arm]`, `[sensor]` and `[[loads]]` (e.g. scenes/mast-arm.toml).
+    /// Scene TOML file with `[arm]`, `[sensor]` and `[[loads]]` (e.g. scenes/mast-arm.toml);
+    /// with `--lab`, a free-ball scene (`paper`, built in).
     #[arg(long, short)]
     pub scene: String,
     /// Simulated time [s] (default: the scene's).
@@ -126,6 +127,17 @@ pub struct EstimateArgs {
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,
+    /// The lab study instead of the twin: the scene's free ball (e.g. `paper`) under a
+    /// wind-like tip force, truth against the same arm with the ball locked (what a monitor
+    /// model without the ball's motion predicts).
+    #[arg(long)]
+    pub lab: bool,
+    /// `--lab`: amplitude of the tip force [N] (at the scene's excitation frequency).
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
+    pub tip_force: f64,
+    /// `--lab`: the tip force's frequency [Hz] (default: the scene's excitation frequency).
+    #[arg(long, allow_negative_numbers = true)]
+    pub frequency: Option<f64>,
 }
 
 /// `validation` options.

@@ -17,6 +17,43 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             a.load_step
         );
     }
+    if a.lab {
+        let duration = a.duration.unwrap_or(scene.file.duration);
+        let mut scene = scene;
+        if let Some(f) = a.frequency {
+            if !(f.is_finite() && f > 0.0) {
+                bail!("invalid value for `--frequency`: {f} (must be finite and positive)");
+            }
+            scene.file.excitation.frequency = Some(f);
+        }
+        let r = crate::estimate::lab(&scene, duration, a.tip_force)?;
+        if a.json {
+            println!("{}", serde_json::to_string(&r)?);
+            return Ok(());
+        }
+        println!(
+            "lab: full solver, 16 elements; tip force {} N at {} Hz in lock-in episodes {:?} s, no base motion, {} s",
+            r.force_amplitude, r.force_frequency, r.episodes, r.duration
+        );
+        println!(
+            "truth (free ball, flight on): root stress RMS {:.3} MPa, {} stop impacts, ball in flight {:.1} % of the time",
+            r.free_stress_rms_mpa,
+            r.impacts,
+            100.0 * r.flight_fraction
+        );
+        println!(
+            "ball locked (a model without the ball's motion): RMS {:.3} MPa; difference {:.1} % of the truth's RMS",
+            r.locked_stress_rms_mpa, r.exclusion_error_pct
+        );
+        println!(
+            "Miner damage, locked / free (category E', no threshold): {:.3}; with the CAFT cutoff: {:.3}",
+            r.damage_ratio, r.damage_ratio_cutoff
+        );
+        return Ok(());
+    }
+    if a.frequency.is_some() {
+        bail!("`--frequency` belongs to `--lab` (the twin's loads come from the scene)");
+    }
     if let Some(path) = &a.emit_firmware {
         let text = crate::estimate::firmware_constants(&scene)?;
         crate::output::atomic_write(path, text.as_bytes())?;
