@@ -812,8 +812,8 @@ mod twin_tests {
     /// the targets against the full-solver truth — dynamic root-stress RMS error
     /// ≤ 10 % of the true RMS, Miner damage ratio in 0.8–1.25 — with no failed sample.
     /// The lab study's physics: off the absorber's tuning (3.70 Hz) the ball hardly moves and a
-    /// model with it locked predicts the root stress within 2 % of the free-ball truth (the
-    /// ball's motion enters at second order in its ~1° swing); at the design frequency (4.13 Hz,
+    /// model with it locked predicts the root stress within 2 % of the free-ball truth (a small
+    /// swing of the ball enters the housing's forces at second order); at the design frequency (4.13 Hz,
     /// the paper's 2:1 tuning) the free ball takes energy out of the beam, and the locked-ball
     /// model overpredicts the stress RMS by more than half (measured ×2.2 over 60 s).
     #[test]
