@@ -111,9 +111,10 @@ pub struct EstimateArgs {
     /// Simulated time [s] (default: the scene's).
     #[arg(long, allow_negative_numbers = true)]
     pub duration: Option<f64>,
-    /// Standard deviation of the estimator's tip-load random walk per sample [N].
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
-    pub load_step: f64,
+    /// Standard deviation of the estimator's tip-load random walk per sample [N] (default:
+    /// 0.5; with `--lab`, the tip force's largest change per sample, 2π f A h).
+    #[arg(long, allow_negative_numbers = true)]
+    pub load_step: Option<f64>,
     /// Time constant of the estimator's tip-load model (Gauss–Markov) [s].
     #[arg(long, default_value_t = 5.0, allow_negative_numbers = true)]
     pub load_time: f64,
@@ -129,7 +130,8 @@ pub struct EstimateArgs {
     pub json: bool,
     /// The lab study instead of the twin: the scene's free ball (e.g. `paper`) under a
     /// wind-like tip force, truth against the same arm with the ball locked (what a monitor
-    /// model without the ball's motion predicts).
+    /// model without the ball's motion predicts), and the estimator with the ball left out
+    /// and with the ball in its state.
     #[arg(long)]
     pub lab: bool,
     /// `--lab`: amplitude of the tip force [N] (at the scene's excitation frequency).

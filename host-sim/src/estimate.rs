@@ -16,7 +16,7 @@ use absorber_core::loads::{arm_section, ArmParams, Loads};
 use absorber_core::monitor::fatigue::{DetailCategory, StressDamage};
 use absorber_core::monitor::rainflow::Cycle;
 use absorber_core::monitor::stress::{root_reaction_moment, RootSection};
-use absorber_core::{Arm, BeamOnly, Model, Params};
+use absorber_core::{Arm, BeamOnly, Model, Params, Scene as CoreScene};
 use anyhow::{anyhow, bail, Result};
 use nalgebra::{DMatrix, DVector, SVector};
 use serde::Serialize;
@@ -60,7 +60,7 @@ fn core(e: absorber_core::Error) -> anyhow::Error {
 }
 
 /// Packs a state into `(q, v, a, pseudo_accel)`.
-fn pack(s: &absorber_core::State<f64, D>) -> DVector<f64> {
+fn pack<const D: usize>(s: &absorber_core::State<f64, D>) -> DVector<f64> {
     DVector::from_iterator(
         4 * D,
         s.q.iter()
@@ -71,7 +71,10 @@ fn pack(s: &absorber_core::State<f64, D>) -> DVector<f64> {
     )
 }
 
-fn unpack(base: &absorber_core::State<f64, D>, x: &DVector<f64>) -> absorber_core::State<f64, D> {
+fn unpack<const D: usize>(
+    base: &absorber_core::State<f64, D>,
+    x: &DVector<f64>,
+) -> absorber_core::State<f64, D> {
     let mut s = *base;
     let part = |k: usize| SVector::<f64, D>::from_iterator(x.rows(k * D, D).iter().copied());
     s.q = part(0);
@@ -85,9 +88,10 @@ fn unpack(base: &absorber_core::State<f64, D>, x: &DVector<f64>) -> absorber_cor
 /// Newton tolerance), root `section` and `noise` (module doc of
 /// [`absorber_core::estimator`]): the step map linearized by central differences, augmented
 /// with the tip load and the bias, the Riccati equation iterated to a relative change of the
-/// gain below 1e-10.
-pub fn design(
-    model: &ArmModel<f64>,
+/// gain below 1e-10. Any scene with loads: the arm ([`ArmModel`]), or the paper's bodies
+/// with the ball locked or free (`Loaded<LockedBall>`, `Loaded<FreeBall>`, the lab study).
+pub fn design<S: CoreScene, const D: usize>(
+    model: &Model<f64, S, N, D>,
     section: &RootSection<f64>,
     noise: &FilterNoise,
 ) -> Result<Gain<f64, D>> {
@@ -131,6 +135,13 @@ pub fn design(
     h[tip] = 1.0;
     h[nx + 1] = 1.0;
     let r = noise.measurement.powi(2);
+    // Balanced coordinates x̃ = T⁻¹x (T diagonal, powers of two: exact): the step map mixes
+    // positions, rates and accelerations of stiff axial modes, entries over ~14 decades, and
+    // the Riccati iteration's rounding floor in raw units lay above its convergence test.
+    let t = balance(&a);
+    let a = DMatrix::from_fn(n, n, |i, j| a[(i, j)] * t[j] / t[i]);
+    let q = DMatrix::from_fn(n, n, |i, j| q[(i, j)] / (t[i] * t[j]));
+    let h = DVector::from_fn(n, |i, _| h[i] * t[i]);
     let mut p = q.clone();
     let mut k = DVector::<f64>::zeros(n);
     let mut post = p.clone();
@@ -154,6 +165,9 @@ pub fn design(
     if !converged {
         bail!("the estimator's Riccati iteration did not converge");
     }
+    // Back to physical coordinates: K = T K̃, P = T P̃ T.
+    let k = DVector::from_fn(n, |i, _| k[i] * t[i]);
+    let post = DMatrix::from_fn(n, n, |i, j| post[(i, j)] * t[i] * t[j]);
     // Stress sensitivity to the state, by central differences of the clamp reaction.
     let mut c = DVector::<f64>::zeros(n);
     let stress = |x: &DVector<f64>| {
@@ -188,6 +202,46 @@ pub fn design(
         load_sd: post[(nx, nx)].max(0.0).sqrt(),
     };
     Ok(gain)
+}
+
+/// Diagonal balancing of a square matrix (Osborne's iteration as in LAPACK's `gebal`, powers
+/// of two): `t` such that `T⁻¹ A T` has rows and columns of comparable norms.
+fn balance(a: &DMatrix<f64>) -> Vec<f64> {
+    let n = a.nrows();
+    let mut t = vec![1.0f64; n];
+    for _ in 0..100 {
+        let mut done = true;
+        for i in 0..n {
+            let (mut col, mut row) = (0.0, 0.0);
+            for j in (0..n).filter(|&j| j != i) {
+                col += (a[(j, i)] * t[i] / t[j]).abs();
+                row += (a[(i, j)] * t[j] / t[i]).abs();
+            }
+            if col == 0.0 || row == 0.0 {
+                continue;
+            }
+            let mut f = 1.0;
+            let (mut c, mut r) = (col, row);
+            while c < r / 2.0 {
+                c *= 2.0;
+                r /= 2.0;
+                f *= 2.0;
+            }
+            while c >= r * 2.0 {
+                c /= 2.0;
+                r *= 2.0;
+                f /= 2.0;
+            }
+            if (c + r) < 0.95 * (col + row) {
+                done = false;
+                t[i] *= f;
+            }
+        }
+        if done {
+            break;
+        }
+    }
+    t
 }
 
 /// The root section of an arm: `c = D_root / 2`, `I` of the root ring.
@@ -585,6 +639,35 @@ pub struct LabReport {
     pub impacts: u64,
     /// Truth's fraction of the time with the ball in flight.
     pub flight_fraction: f64,
+    /// The sensor noise σ the estimators were fed and designed for \[m/s²\].
+    pub sensor_noise: f64,
+    /// The estimators' load model: σ of the increment per sample \[N\].
+    pub load_step: f64,
+    /// The estimators' load model: time constant \[s\].
+    pub load_time: f64,
+    /// The estimators' calibration of the `N = 3` model (fitted to the 16-element reference).
+    pub calibration: [f64; 3],
+    /// The estimators (core, `N = 3`, `f32`) fed the truth's noisy tip acceleration.
+    pub estimators: Vec<LabEstimate>,
+}
+
+/// One estimator of the lab study against one truth.
+#[derive(Clone, Debug, Serialize)]
+pub struct LabEstimate {
+    /// Which model the estimator runs and which truth it is fed.
+    pub case: &'static str,
+    /// RMS of the dynamic stress error in % of the truth's RMS (static offsets removed).
+    pub stress_rms_error_pct: f64,
+    /// Estimated / true Miner damage (category E′, no threshold).
+    pub damage_ratio: f64,
+    /// The filter's steady-state stress sd \[MPa\].
+    pub stress_sd_mpa: f64,
+    /// RMS of the estimated tip load \[N\] (the truth's force is `force_amplitude` in episodes).
+    pub load_rms: f64,
+    /// Estimator samples that returned an error.
+    pub failed: usize,
+    /// Samples beyond the sensor range.
+    pub clipped: usize,
 }
 
 /// Tip force of the lab study \[N\] at time `t`: vortex shedding locked in at `frequency`
@@ -605,17 +688,188 @@ fn lab_force(t: f64, amplitude: f64, frequency: f64, episodes: &[[f64; 2]]) -> f
     w * amplitude * (2.0 * std::f64::consts::PI * frequency * t).sin()
 }
 
+/// The estimators' tip-load model in the lab study (the filter's assumption, not the truth's
+/// force).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterLoad {
+    /// σ of the load's increment per sample \[N\]; `None`: the lab force's largest change per
+    /// sample, `2π f A h`.
+    pub step: Option<f64>,
+    /// Time constant τ of the Gauss–Markov load \[s\].
+    pub time: f64,
+}
+
+/// Root-stress histories of the lab study \[Pa\], one per step.
+#[derive(Clone, Debug, Default)]
+pub struct LabSeries {
+    /// Time \[s\].
+    pub time: Vec<f64>,
+    /// Truth, free ball.
+    pub free: Vec<f64>,
+    /// Ball locked (full solver).
+    pub locked: Vec<f64>,
+    /// Estimator without the ball (locked-ball model) on the free truth.
+    pub left_out: Vec<f64>,
+    /// Estimator with the ball in its state on the free truth.
+    pub in_state: Vec<f64>,
+    /// Locked-ball estimator on the locked truth.
+    pub control: Vec<f64>,
+}
+
+/// One run of the lab's truth: root stress and tip acceleration per step, the static stress.
+struct LabTruth {
+    stress: Vec<f64>,
+    tip_accel: Vec<f64>,
+    static_stress: f64,
+    impacts: u64,
+    flying: usize,
+}
+
+/// The accelerometer of the lab study when the scene has no `[sensor]`: the mast arm's MEMS
+/// part (ADXL355, 25 µg/√Hz, 20 mg bias, ±2 g) at the scene's step rate, filtered at a quarter
+/// of it.
+fn lab_sensor(scene: &Scene, h: f64) -> Result<crate::scene::SensorSection> {
+    let sensor = scene.file.sensor.unwrap_or(crate::scene::SensorSection {
+        noise_density_ug: 25.0,
+        bias_mg: 20.0,
+        range_g: 2.0,
+        rate: 1.0 / h,
+        bandwidth: 0.25 / h,
+        seed: 1,
+    });
+    if ((1.0 / h) / sensor.rate - 1.0).abs() > 1e-9 {
+        bail!(
+            "`integrator.step` ({h} s) must be 1 / `sensor.rate` ({} Hz): the estimator runs at the sensor rate",
+            sensor.rate
+        );
+    }
+    Ok(sensor)
+}
+
+/// Runs the estimator of scene `S` (`N = 3`, `f32`, parameters `params`, gain designed in
+/// `f64` for `noise`) on the measured tip accelerations `measured` and scores its root stress
+/// against the truth's.
+fn lab_estimate<S: CoreScene, const D: usize>(
+    case: &'static str,
+    params: &Params<f64>,
+    noise: &FilterNoise,
+    range: f64,
+    measured: &[f64],
+    truth: &LabTruth,
+) -> Result<(LabEstimate, Vec<f64>)> {
+    let mut pd = *params;
+    pd.integrator.tolerance = 1e-13;
+    pd.integrator.newton = absorber_core::NewtonKind::Full;
+    let design_model = Model::<f64, S, N, D>::at_rest(pd, 0.0).map_err(core)?;
+    let section = RootSection::rectangle(&params.beam).map_err(core)?;
+    let gain = design(&design_model, &section, noise).map_err(|e| anyhow!("{case}: {e}"))?;
+    let mut pe = *params;
+    pe.integrator.tolerance = ESTIMATOR_TOLERANCE;
+    let p32 = crate::core_sim::params_f32(&pe);
+    let model = Model::<f32, S, N, D>::at_rest(p32, 0.0).map_err(core)?;
+    let mut est = Estimator::new(
+        model,
+        gain.cast::<f32>(),
+        root_section32(&section),
+        range as f32,
+    )
+    .map_err(core)?;
+    let rest = measured.get(1..).unwrap_or_default();
+    // Zero-g calibration at installation: the mean of the first second's samples, before the
+    // first episode's ramp (the ball released at its initial angle swings: its reaction in
+    // the first sample alone is an acceleration offset of several noise σ, which the filter
+    // then explains as a growing load).
+    let quiet = &measured[..measured
+        .len()
+        .min((1.0 / params.integrator.step).round() as usize)];
+    let mean = quiet.iter().sum::<f64>() / quiet.len().max(1) as f64;
+    est.initialize_bias(0.0, mean as f32).map_err(core)?;
+    let static_est = f64::from(est.root_stress());
+    let mut last = static_est;
+    let (mut failed, mut clipped) = (0, 0);
+    let mut stress = Vec::with_capacity(rest.len());
+    let mut load2 = 0.0;
+    for y in rest {
+        match est.update(0.0, *y as f32) {
+            Ok(e) => {
+                last = f64::from(e.root_stress);
+                clipped += usize::from(e.clipped);
+            }
+            Err(_) => failed += 1,
+        }
+        stress.push(last);
+        load2 += f64::from(est.load()).powi(2);
+    }
+    let n = stress.len().max(1) as f64;
+    let offset = static_est - truth.static_stress;
+    let mean_t = truth.stress.iter().sum::<f64>() / n;
+    let rms_t = (truth
+        .stress
+        .iter()
+        .map(|x| (x - mean_t).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let rms_e = (stress
+        .iter()
+        .zip(&truth.stress)
+        .map(|(e, t)| (e - t - offset).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let mut d_true = Damage::new(DetailCategory::EPrime)?;
+    let mut d_est = Damage::new(DetailCategory::EPrime)?;
+    for (t, e) in truth.stress.iter().zip(&stress) {
+        d_true.push(*t)?;
+        d_est.push(*e)?;
+    }
+    let (e_true, _, _) = d_true.finish();
+    let (e_est, _, _) = d_est.finish();
+    let report = LabEstimate {
+        case,
+        stress_rms_error_pct: 100.0 * rms_e / rms_t,
+        damage_ratio: e_est / e_true,
+        stress_sd_mpa: gain.stress_sd / 1e6,
+        load_rms: (load2 / n).sqrt(),
+        failed,
+        clipped,
+    };
+    Ok((report, stress))
+}
+
 /// The lab study (module doc): the full solver with 16 elements runs `scene` (the paper's
 /// free ball; no base motion) twice under the same wind-like tip force — with the ball free
 /// (the truth) and with it locked in the housing (a monitor model without the ball's motion) —
-/// and compares their root stress.
-pub fn lab(scene: &Scene, duration: f64, amplitude: f64) -> Result<LabReport> {
+/// and compares their root stress. Then the estimator (core, `N = 3`, `f32`, calibrated to
+/// the 16-element reference) is fed each truth's tip acceleration through the sensor (the
+/// scene's `[sensor]`, or [`lab_sensor`]'s MEMS part): with the ball left out of its model
+/// (locked) and with the ball in its state (free ball, `D = 13`), against the free truth; and,
+/// as the control where the model is right, the locked-ball estimator on the locked truth.
+pub fn lab(
+    scene: &Scene,
+    duration: f64,
+    amplitude: f64,
+    load: FilterLoad,
+) -> Result<(LabReport, LabSeries)> {
     use crate::full::{FullSolver, SceneKind};
+    use absorber_core::{FreeBall, Loaded, LockedBall};
     if !(duration.is_finite() && duration > 0.0) {
         bail!("invalid value for `--duration`: {duration} (must be finite and positive)");
     }
     if !(amplitude.is_finite() && amplitude > 0.0) {
         bail!("invalid value for `--tip-force`: {amplitude} (must be finite and positive)");
+    }
+    if !load.step.is_none_or(|s| s.is_finite() && s > 0.0) {
+        bail!(
+            "invalid value for `--load-step`: {:?} (must be finite and positive)",
+            load.step
+        );
+    }
+    if !(load.time.is_finite() && load.time > 0.0) {
+        bail!(
+            "invalid value for `--load-time`: {} (must be finite and positive)",
+            load.time
+        );
     }
     let mut params = scene.params()?;
     params.integrator.tolerance = TRUTH_TOLERANCE;
@@ -624,6 +878,7 @@ pub fn lab(scene: &Scene, duration: f64, amplitude: f64) -> Result<LabReport> {
         _ => bail!("the lab study drives the tip at the scene's `excitation.frequency`: none set"),
     };
     let h = params.integrator.step;
+    let sensor = lab_sensor(scene, h)?;
     let steps = (duration / h).round() as usize;
     // Lock-in episodes of 20 s every 30 s (vortex shedding comes and goes with the wind).
     let episodes: Vec<[f64; 2]> = (0..)
@@ -635,60 +890,152 @@ pub fn lab(scene: &Scene, duration: f64, amplitude: f64) -> Result<LabReport> {
         absorber_core::ancf::Element::of_beam(&params.beam, &params.calibration, TRUTH_ELEMENTS);
     let beam = absorber_core::beam::Beam::new(element, params.damping.stiffness_proportional);
     let zero_line = vec![0.0; TRUTH_ELEMENTS];
-    let run = |kind: SceneKind| -> Result<(Vec<f64>, u64, usize)> {
+    let tip = 4 * TRUTH_ELEMENTS + 1;
+    let stress_of = |st: &crate::full::FullState| {
+        clamp_stress(
+            &beam,
+            beam.element.gravity_force(params.gravity + st.base_accel),
+            &section,
+            st,
+        )
+    };
+    let run = |kind: SceneKind| -> Result<LabTruth> {
         let mut s = FullSolver::at_rest(params, kind, TRUTH_ELEMENTS, 0.0).map_err(core)?;
-        let (mut out, mut impacts, mut flying) = (Vec::with_capacity(steps), 0u64, 0usize);
+        let mut truth = LabTruth {
+            stress: Vec::with_capacity(steps),
+            tip_accel: Vec::with_capacity(steps + 1),
+            static_stress: stress_of(s.state()),
+            impacts: 0,
+            flying: 0,
+        };
+        truth.tip_accel.push(s.state().a[tip]);
         for k in 1..=steps {
             let t = k as f64 * h;
             s.set_loads(lab_force(t, amplitude, frequency, &episodes), &zero_line)
                 .map_err(core)?;
             let r = s.step(0.0).map_err(core)?;
-            impacts += u64::from(r.impact.is_some());
-            flying += usize::from(s.in_flight());
-            let st = s.state();
-            out.push(clamp_stress(
-                &beam,
-                beam.element.gravity_force(params.gravity + st.base_accel),
-                &section,
-                st,
-            ));
+            truth.impacts += u64::from(r.impact.is_some());
+            truth.flying += usize::from(s.in_flight());
+            truth.stress.push(stress_of(s.state()));
+            truth.tip_accel.push(s.state().a[tip]);
         }
-        Ok((out, impacts, flying))
+        Ok(truth)
     };
-    let (free, impacts, flying) = run(SceneKind::FreeBall)?;
-    let (locked, _, _) = run(SceneKind::LockedBall)?;
-    let n = free.len() as f64;
+    let free = run(SceneKind::FreeBall)?;
+    let locked = run(SceneKind::LockedBall)?;
+    let n = free.stress.len() as f64;
     let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
     let rms = |x: &[f64]| {
         let m = mean(x);
         (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / x.len() as f64).sqrt()
     };
-    let diff: Vec<f64> = locked.iter().zip(&free).map(|(l, f)| l - f).collect();
+    let diff: Vec<f64> = locked
+        .stress
+        .iter()
+        .zip(&free.stress)
+        .map(|(l, f)| l - f)
+        .collect();
     let mut d_free = Damage::new(DetailCategory::EPrime)?;
     let mut d_locked = Damage::new(DetailCategory::EPrime)?;
-    for (f, l) in free.iter().zip(&locked) {
+    for (f, l) in free.stress.iter().zip(&locked.stress) {
         d_free.push(*f)?;
         d_locked.push(*l)?;
     }
     let (e_free, c_free, _) = d_free.finish();
     let (e_locked, c_locked, _) = d_locked.finish();
-    Ok(LabReport {
+    // The estimators: N = 3 calibrated to the 16-element reference (f₁, f₂, the free-ball
+    // beam mode, the sag), the sensor's noise and bias on each truth's tip acceleration.
+    let (reference, free_index) = crate::calibrate::reference(scene, TRUTH_ELEMENTS)?;
+    let fit = crate::calibrate::fit(scene, N, &reference, free_index)?;
+    let mut pc = scene.params()?;
+    pc.calibration = fit.calibration;
+    // The monitor does not know the ball's angle: its model starts with the ball plumb, the
+    // static state its gain is designed about.
+    pc.ball.initial_angle = 0.0;
+    let g0 = 9.80665;
+    let range = sensor.range_g * g0;
+    let noise = FilterNoise {
+        measurement: sensor.noise_density_ug * 1e-6 * g0 * sensor.bandwidth.sqrt(),
+        // By default the random walk follows the forcing's largest change per sample, 2π f A h.
+        load_step: load
+            .step
+            .unwrap_or(2.0 * std::f64::consts::PI * frequency * amplitude * h),
+        bias_step: 2.5e-6,
+        load_time: load.time,
+        step: h,
+    };
+    let measure = |truth: &LabTruth| -> Vec<f64> {
+        let mut rng = Rng::new(sensor.seed);
+        let bias = sensor.bias_mg * 1e-3 * g0;
+        truth
+            .tip_accel
+            .iter()
+            .map(|a| (a + bias + noise.measurement * rng.normal()).clamp(-range, range))
+            .collect()
+    };
+    let (y_free, y_locked) = (measure(&free), measure(&locked));
+    const L: usize = 4 * N;
+    const F: usize = 4 * N + 1;
+    let (left_out, left_out_stress) = lab_estimate::<Loaded<LockedBall>, L>(
+        "ball left out (locked-ball model), free-ball truth",
+        &pc,
+        &noise,
+        range,
+        &y_free,
+        &free,
+    )?;
+    let (in_state, in_state_stress) = lab_estimate::<Loaded<FreeBall>, F>(
+        "ball in the state (free-ball model), free-ball truth",
+        &pc,
+        &noise,
+        range,
+        &y_free,
+        &free,
+    )?;
+    let (control, control_stress) = lab_estimate::<Loaded<LockedBall>, L>(
+        "control: locked-ball model, locked-ball truth",
+        &pc,
+        &noise,
+        range,
+        &y_locked,
+        &locked,
+    )?;
+    let series = LabSeries {
+        time: (1..=steps).map(|k| k as f64 * h).collect(),
+        free: free.stress,
+        locked: locked.stress,
+        left_out: left_out_stress,
+        in_state: in_state_stress,
+        control: control_stress,
+    };
+    let estimators = vec![left_out, in_state, control];
+    let report = LabReport {
         force_amplitude: amplitude,
         force_frequency: frequency,
         episodes,
         duration,
-        free_stress_rms_mpa: rms(&free) / 1e6,
-        locked_stress_rms_mpa: rms(&locked) / 1e6,
-        exclusion_error_pct: 100.0 * rms(&diff) / rms(&free),
+        free_stress_rms_mpa: rms(&series.free) / 1e6,
+        locked_stress_rms_mpa: rms(&series.locked) / 1e6,
+        exclusion_error_pct: 100.0 * rms(&diff) / rms(&series.free),
         damage_ratio: e_locked / e_free,
         damage_ratio_cutoff: if c_free > 0.0 {
             c_locked / c_free
         } else {
             f64::NAN
         },
-        impacts,
-        flight_fraction: flying as f64 / n,
-    })
+        impacts: free.impacts,
+        flight_fraction: free.flying as f64 / n,
+        sensor_noise: noise.measurement,
+        load_step: noise.load_step,
+        load_time: noise.load_time,
+        calibration: [
+            fit.calibration.bending_stiffness,
+            fit.calibration.axial_stiffness,
+            fit.calibration.mass_lumping,
+        ],
+        estimators,
+    };
+    Ok((report, series))
 }
 
 fn cast_params(p: &Params<f64>) -> Params<f32> {
@@ -816,12 +1163,24 @@ mod twin_tests {
     /// swing of the ball enters the housing's forces at second order); at the design frequency (4.13 Hz,
     /// the paper's 2:1 tuning) the free ball takes energy out of the beam, and the locked-ball
     /// model overpredicts the stress RMS by more than half (measured ×2.2 over 60 s).
+    ///
+    /// The estimator (core, N = 3, f32, calibrated, fed the truth's noisy tip acceleration):
+    /// off tuning it meets the twin's targets (dynamic RMS error ≤ 10 %, damage ratio 0.8–1.25;
+    /// measured 5.1–5.5 %, 1.02) with the ball left out or in its state; at the design
+    /// frequency it meets them where its model is right (the ball locked in truth and model:
+    /// 0.7 %, 1.00), and with the ball left out it misses by far (measured 252 %): the error
+    /// is the ball's, not the filter's.
     #[test]
     fn excluding_the_ball_costs_nothing_off_tuning_and_most_of_the_stress_on_it() {
+        let load = FilterLoad {
+            step: None,
+            time: 5.0,
+        };
         let paper = Scene::paper();
         let mut off = Scene::paper();
         off.file.excitation.frequency = Some(3.70);
-        let r_off = lab(&off, 25.0, 0.05).expect("off tuning");
+        let (r_off, s_off) = lab(&off, 25.0, 0.05, load).expect("off tuning");
+        assert_eq!(s_off.time.len(), 25_000 / 3);
         assert!(
             r_off.exclusion_error_pct < 2.0,
             "{}",
@@ -832,7 +1191,12 @@ mod twin_tests {
             "{}",
             r_off.damage_ratio
         );
-        let r_on = lab(&paper, 25.0, 0.05).expect("on tuning");
+        for e in &r_off.estimators {
+            assert_eq!(e.failed, 0, "{}", e.case);
+            assert!(e.stress_rms_error_pct <= 10.0, "{e:?}");
+            assert!((0.8..=1.25).contains(&e.damage_ratio), "{e:?}");
+        }
+        let (r_on, _) = lab(&paper, 25.0, 0.05, load).expect("on tuning");
         assert!(r_on.impacts > 0, "the ball reaches the stops");
         assert!(
             r_on.locked_stress_rms_mpa > 1.5 * r_on.free_stress_rms_mpa,
@@ -840,6 +1204,12 @@ mod twin_tests {
             r_on.locked_stress_rms_mpa,
             r_on.free_stress_rms_mpa
         );
+        let [left_out, _, control] = r_on.estimators.as_slice() else {
+            panic!("three estimators")
+        };
+        assert!(control.stress_rms_error_pct <= 10.0, "{control:?}");
+        assert!((0.8..=1.25).contains(&control.damage_ratio), "{control:?}");
+        assert!(left_out.stress_rms_error_pct > 100.0, "{left_out:?}");
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! ([`crate::estimate::twin`]).
 
 use crate::cli::EstimateArgs;
-use crate::estimate::{twin, TwinReport, TwinSeries};
+use crate::estimate::{twin, LabReport, LabSeries, TwinReport, TwinSeries};
 use crate::output::{OutputDir, Status};
 use crate::plot::{render, Panel, Series};
 use crate::scene::Scene;
@@ -11,10 +11,15 @@ use anyhow::{bail, Result};
 /// Runs the command.
 pub fn run(a: &EstimateArgs) -> Result<()> {
     let scene = Scene::load(&a.scene)?;
-    if !(a.load_step.is_finite() && a.load_step > 0.0) {
+    if let Some(step) = a.load_step {
+        if !(step.is_finite() && step > 0.0) {
+            bail!("invalid value for `--load-step`: {step} (must be finite and positive)");
+        }
+    }
+    if !(a.load_time.is_finite() && a.load_time > 0.0) {
         bail!(
-            "invalid value for `--load-step`: {} (must be finite and positive)",
-            a.load_step
+            "invalid value for `--load-time`: {} (must be finite and positive)",
+            a.load_time
         );
     }
     if a.lab {
@@ -26,7 +31,19 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             }
             scene.file.excitation.frequency = Some(f);
         }
-        let r = crate::estimate::lab(&scene, duration, a.tip_force)?;
+        let mut out = match &a.out {
+            Some(dir) => Some(OutputDir::open(dir, Some("lab"), "estimate --lab")?),
+            None => None,
+        };
+        let load = crate::estimate::FilterLoad {
+            step: a.load_step,
+            time: a.load_time,
+        };
+        let (r, series) = crate::estimate::lab(&scene, duration, a.tip_force, load)?;
+        if let Some(mut dir) = out.take() {
+            write_lab_files(&mut dir, &r, &series)?;
+            dir.commit(Status::Complete, serde_json::to_value(&r)?)?;
+        }
         if a.json {
             println!("{}", serde_json::to_string(&r)?);
             return Ok(());
@@ -49,6 +66,20 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             "Miner damage, locked / free (category E', no threshold): {:.3}; with the CAFT cutoff: {:.3}",
             r.damage_ratio, r.damage_ratio_cutoff
         );
+        println!(
+            "estimators (core, 3 elements, f32; calibration E·I × {:.4}, E·a × {:.4}, lumping {:.3}; sensor noise σ {:.2e} m/s²; load model: step σ {:.3e} N, τ {} s):",
+            r.calibration[0], r.calibration[1], r.calibration[2], r.sensor_noise, r.load_step, r.load_time
+        );
+        println!(
+            "  {:<55} {:>12} {:>8} {:>10} {:>7}",
+            "case", "RMS error %", "damage", "load RMS N", "failed"
+        );
+        for e in &r.estimators {
+            println!(
+                "  {:<55} {:>12.1} {:>8.3} {:>10.4} {:>7}",
+                e.case, e.stress_rms_error_pct, e.damage_ratio, e.load_rms, e.failed
+            );
+        }
         return Ok(());
     }
     if a.frequency.is_some() {
@@ -65,13 +96,7 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
         Some(dir) => Some(OutputDir::open(dir, Some("estimate"), "estimate")?),
         None => None,
     };
-    if !(a.load_time.is_finite() && a.load_time > 0.0) {
-        bail!(
-            "invalid value for `--load-time`: {} (must be finite and positive)",
-            a.load_time
-        );
-    }
-    let (report, series) = twin(&scene, duration, a.load_step, a.load_time)?;
+    let (report, series) = twin(&scene, duration, a.load_step.unwrap_or(0.5), a.load_time)?;
     if let Some(dir) = out.as_mut() {
         write_files(dir, &report, &series)?;
     }
@@ -132,6 +157,63 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             );
         }
     }
+    Ok(())
+}
+
+/// `lab.csv`, `lab.json` and `lab_stress.png` of the lab study.
+fn write_lab_files(dir: &mut OutputDir, r: &LabReport, s: &LabSeries) -> Result<()> {
+    let mut csv = String::from(
+        "# host-sim estimate --lab: t [s]; root stress [Pa]: truth with the ball free, full solver with the ball locked, \
+         estimators (core N = 3 f32) without the ball and with the ball in the state on the free truth, locked estimator on the locked truth\n\
+         t,free,locked,estimate_ball_left_out,estimate_ball_in_state,estimate_control\n",
+    );
+    for i in 0..s.time.len() {
+        csv.push_str(&format!(
+            "{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n",
+            s.time[i], s.free[i], s.locked[i], s.left_out[i], s.in_state[i], s.control[i]
+        ));
+    }
+    dir.write("lab.csv", &csv)?;
+    dir.write("lab.json", &serde_json::to_string_pretty(r)?)?;
+    let mpa = |v: &[f64]| -> Vec<(f64, f64)> {
+        s.time.iter().zip(v).map(|(t, x)| (*t, x / 1e6)).collect()
+    };
+    let panels = [
+        Panel::new(
+            "estimator without the ball, free-ball truth",
+            "t [s]",
+            "root stress [MPa]",
+            vec![
+                Series::line("truth (ball free)", mpa(&s.free)).colored(0),
+                Series::line("estimate, ball left out", mpa(&s.left_out)).colored(1),
+            ],
+        ),
+        Panel::new(
+            "estimator with the ball in its state, free-ball truth",
+            "t [s]",
+            "root stress [MPa]",
+            vec![
+                Series::line("truth (ball free)", mpa(&s.free)).colored(0),
+                Series::line("estimate, ball in the state", mpa(&s.in_state)).colored(2),
+            ],
+        ),
+        Panel::new(
+            "control: ball locked in truth and estimator",
+            "t [s]",
+            "root stress [MPa]",
+            vec![
+                Series::line("truth (ball locked)", mpa(&s.locked)).colored(3),
+                Series::line("estimate, locked-ball model", mpa(&s.control)).colored(1),
+            ],
+        ),
+    ];
+    let title = format!(
+        "lab scene, tip force {} N at {} Hz: root stress, truth and estimates from the tip accelerometer",
+        r.force_amplitude, r.force_frequency
+    );
+    dir.write_with("lab_stress.png", |p| {
+        render(p, &title, &panels, 3, 1, (1200, 1100))
+    })?;
     Ok(())
 }
 
