@@ -377,6 +377,31 @@ impl Damage {
     }
 }
 
+/// Mean of `x`.
+fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+/// RMS of `x` about its mean.
+fn rms_about_mean(x: &[f64]) -> f64 {
+    let m = mean(x);
+    (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+/// Miner damage of two stress histories \[Pa\] (rainflow and Miner of the core, `category`):
+/// per history the damage without threshold, with the CAFT cutoff, and the counted ranges.
+fn damages(category: DetailCategory, a: &[f64], b: &[f64]) -> Result<[DamageSum; 2]> {
+    let (mut da, mut db) = (Damage::new(category)?, Damage::new(category)?);
+    for (x, y) in a.iter().zip(b) {
+        da.push(*x)?;
+        db.push(*y)?;
+    }
+    Ok([da.finish(), db.finish()])
+}
+
+/// Damage without threshold, with the cutoff, and the ranges with their counts.
+type DamageSum = (f64, f64, Vec<(f64, f64)>);
+
 /// Runs the twin experiment of `scene` for `duration` seconds (module doc).
 pub fn twin(
     scene: &Scene,
@@ -504,15 +529,8 @@ pub fn twin(
     }
     // Scores.
     let n = series.truth.len() as f64;
-    let mean_t = series.truth.iter().sum::<f64>() / n;
-    let mean_e = series.estimate.iter().sum::<f64>() / n;
-    let rms_t = (series
-        .truth
-        .iter()
-        .map(|x| (x - mean_t).powi(2))
-        .sum::<f64>()
-        / n)
-        .sqrt();
+    let (mean_t, mean_e) = (mean(&series.truth), mean(&series.estimate));
+    let rms_t = rms_about_mean(&series.truth);
     let err: Vec<f64> = series
         .truth
         .iter()
@@ -525,14 +543,8 @@ pub fn twin(
     let rms_e = (err.iter().map(|x| x * x).sum::<f64>() / n).sqrt();
     let sd = gain.stress_sd;
     let within = err.iter().filter(|e| e.abs() <= 2.0 * sd).count() as f64 / n;
-    let mut dt = Damage::new(category)?;
-    let mut de = Damage::new(category)?;
-    for (t, e) in series.truth.iter().zip(&series.estimate) {
-        dt.push(*t)?;
-        de.push(*e)?;
-    }
-    let (d_true, c_true, r_true) = dt.finish();
-    let (d_est, c_est, r_est) = de.finish();
+    let [(d_true, c_true, r_true), (d_est, c_est, r_est)] =
+        damages(category, &series.truth, &series.estimate)?;
     let max_range = r_true.iter().fold(0.0f64, |a, b| a.max(b.0));
     // A 1, 2, 5 or 10 MPa… bin: at most 25 bins up to the largest true range.
     let bin = [1e6, 2e6, 5e6, 1e7, 2e7, 5e7, 1e8]
@@ -802,14 +814,7 @@ fn lab_estimate<S: CoreScene, const D: usize>(
     }
     let n = stress.len().max(1) as f64;
     let offset = static_est - truth.static_stress;
-    let mean_t = truth.stress.iter().sum::<f64>() / n;
-    let rms_t = (truth
-        .stress
-        .iter()
-        .map(|x| (x - mean_t).powi(2))
-        .sum::<f64>()
-        / n)
-        .sqrt();
+    let rms_t = rms_about_mean(&truth.stress);
     let rms_e = (stress
         .iter()
         .zip(&truth.stress)
@@ -817,14 +822,7 @@ fn lab_estimate<S: CoreScene, const D: usize>(
         .sum::<f64>()
         / n)
         .sqrt();
-    let mut d_true = Damage::new(DetailCategory::EPrime)?;
-    let mut d_est = Damage::new(DetailCategory::EPrime)?;
-    for (t, e) in truth.stress.iter().zip(&stress) {
-        d_true.push(*t)?;
-        d_est.push(*e)?;
-    }
-    let (e_true, _, _) = d_true.finish();
-    let (e_est, _, _) = d_est.finish();
+    let [(e_true, _, _), (e_est, _, _)] = damages(DetailCategory::EPrime, &truth.stress, &stress)?;
     let report = LabEstimate {
         case,
         stress_rms_error_pct: 100.0 * rms_e / rms_t,
@@ -924,25 +922,14 @@ pub fn lab(
     let free = run(SceneKind::FreeBall)?;
     let locked = run(SceneKind::LockedBall)?;
     let n = free.stress.len() as f64;
-    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
-    let rms = |x: &[f64]| {
-        let m = mean(x);
-        (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / x.len() as f64).sqrt()
-    };
     let diff: Vec<f64> = locked
         .stress
         .iter()
         .zip(&free.stress)
         .map(|(l, f)| l - f)
         .collect();
-    let mut d_free = Damage::new(DetailCategory::EPrime)?;
-    let mut d_locked = Damage::new(DetailCategory::EPrime)?;
-    for (f, l) in free.stress.iter().zip(&locked.stress) {
-        d_free.push(*f)?;
-        d_locked.push(*l)?;
-    }
-    let (e_free, c_free, _) = d_free.finish();
-    let (e_locked, c_locked, _) = d_locked.finish();
+    let [(e_free, c_free, _), (e_locked, c_locked, _)] =
+        damages(DetailCategory::EPrime, &free.stress, &locked.stress)?;
     // The estimators: N = 3 calibrated to the 16-element reference (f₁, f₂, the free-ball
     // beam mode, the sag), the sensor's noise and bias on each truth's tip acceleration.
     let (reference, free_index) = crate::calibrate::reference(scene, TRUTH_ELEMENTS)?;
@@ -1014,9 +1001,9 @@ pub fn lab(
         force_frequency: frequency,
         episodes,
         duration,
-        free_stress_rms_mpa: rms(&series.free) / 1e6,
-        locked_stress_rms_mpa: rms(&series.locked) / 1e6,
-        exclusion_error_pct: 100.0 * rms(&diff) / rms(&series.free),
+        free_stress_rms_mpa: rms_about_mean(&series.free) / 1e6,
+        locked_stress_rms_mpa: rms_about_mean(&series.locked) / 1e6,
+        exclusion_error_pct: 100.0 * rms_about_mean(&diff) / rms_about_mean(&series.free),
         damage_ratio: e_locked / e_free,
         damage_ratio_cutoff: if c_free > 0.0 {
             c_locked / c_free
