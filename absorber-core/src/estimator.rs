@@ -66,6 +66,12 @@ pub struct Gain<T, const D: usize> {
     pub stress_sd: T,
     /// Steady-state standard deviation of the load estimate \[N\].
     pub load_sd: T,
+    /// Steady-state standard deviation of the innovation, `√(h P⁻ hᵀ + r)` \[m/s²\]: what
+    /// the innovations of a model that explained the measurement to the sensor's noise would
+    /// scatter by. A reduced model's own error keeps their RMS at a few times this even where
+    /// its estimate is good; a rise above what the site shows when the estimate is known good
+    /// says the model misses a force (`docs/monitoring.md`).
+    pub innovation_sd: T,
 }
 
 impl<T: Real, const D: usize> Gain<T, D> {
@@ -82,6 +88,7 @@ impl<T: Real, const D: usize> Gain<T, D> {
             bias: c(self.bias),
             stress_sd: c(self.stress_sd),
             load_sd: c(self.load_sd),
+            innovation_sd: c(self.innovation_sd),
         }
     }
 
@@ -96,6 +103,7 @@ impl<T: Real, const D: usize> Gain<T, D> {
                 self.bias,
                 self.stress_sd,
                 self.load_sd,
+                self.innovation_sd,
             ]
             .iter()
             .all(|z| z.is_finite());
@@ -134,6 +142,8 @@ pub struct Estimate<T> {
     pub bias: T,
     /// Innovation: measured minus predicted tip acceleration \[m/s²\].
     pub innovation: T,
+    /// The innovation's steady-state standard deviation ([`Gain::innovation_sd`]) \[m/s²\].
+    pub innovation_sd: T,
     /// The sample was beyond the sensor's range: predicted only, not corrected.
     pub clipped: bool,
     /// The model step's report.
@@ -285,6 +295,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Estimator<T, S, N, D> {
             load_sd: self.gain.load_sd,
             bias,
             innovation,
+            innovation_sd: self.gain.innovation_sd,
             clipped,
             report,
         })
@@ -325,6 +336,7 @@ mod tests {
             bias: 0.0,
             stress_sd: 0.0,
             load_sd: 0.0,
+            innovation_sd: 0.0,
         }
     }
 
@@ -359,6 +371,7 @@ mod tests {
             bias: 0.0,
             stress_sd: 0.0,
             load_sd: 0.0,
+            innovation_sd: 0.0,
         };
         assert!(matches!(
             Estimator::new(paper, g9, section(), 20.0).err(),

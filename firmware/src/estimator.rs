@@ -73,7 +73,7 @@ fn arm() -> ArmParams<f32> {
 }
 
 fn gain() -> Gain<f32, 12> {
-    let [load, load_decay, bias, stress_sd, load_sd] = g::GAIN_SCALARS;
+    let [load, load_decay, bias, stress_sd, load_sd, innovation_sd] = g::GAIN_SCALARS;
     Gain {
         q: SVector::from(g::GAIN_Q),
         v: SVector::from(g::GAIN_V),
@@ -84,6 +84,7 @@ fn gain() -> Gain<f32, 12> {
         bias,
         stress_sd,
         load_sd,
+        innovation_sd,
     }
 }
 

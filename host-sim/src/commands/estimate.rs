@@ -71,13 +71,18 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             r.calibration[0], r.calibration[1], r.calibration[2], r.sensor_noise, r.load_step, r.load_time
         );
         println!(
-            "  {:<55} {:>12} {:>8} {:>10} {:>7}",
-            "case", "RMS error %", "damage", "load RMS N", "failed"
+            "  {:<55} {:>12} {:>8} {:>10} {:>10} {:>7}",
+            "case", "RMS error %", "damage", "load RMS N", "innov./sd", "failed"
         );
         for e in &r.estimators {
             println!(
-                "  {:<55} {:>12.1} {:>8.3} {:>10.4} {:>7}",
-                e.case, e.stress_rms_error_pct, e.damage_ratio, e.load_rms, e.failed
+                "  {:<55} {:>12.1} {:>8.3} {:>10.4} {:>10.2} {:>7}",
+                e.case,
+                e.stress_rms_error_pct,
+                e.damage_ratio,
+                e.load_rms,
+                e.innovation_ratio,
+                e.failed
             );
         }
         return Ok(());
@@ -113,8 +118,8 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
         r.bending_factor, r.frequencies.1, r.frequencies.0
     );
     println!(
-        "sensor noise σ {:.2e} m/s²; {} samples, {} clipped, {} failed",
-        r.noise.measurement, r.samples, r.clipped, r.failed
+        "sensor noise σ {:.2e} m/s²; {} samples, {} clipped, {} failed; innovations' RMS / their steady-state sd {:.2} (1: the model explains the measurement to the noise)",
+        r.noise.measurement, r.samples, r.clipped, r.failed, r.innovation_ratio
     );
     println!(
         "root stress: true RMS about the mean {:.3} MPa, mean true {:.2} / estimated {:.2} MPa",
