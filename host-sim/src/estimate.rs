@@ -893,6 +893,16 @@ pub fn lab(
             load.time
         );
     }
+    if scene.file.kind != crate::scene::Kind::Free {
+        bail!(
+            "the lab study needs a scene with the free ball between stops (`kind = \"free\"`, e.g. `paper`), not `{}`",
+            scene.file.kind.name()
+        );
+    }
+    // The first lock-in episode ramps up from 2 s to 4 s.
+    if duration < 5.0 {
+        bail!("invalid value for `--duration`: {duration} (the lab study needs at least 5 s: its first episode ramps up from 2 s to 4 s)");
+    }
     let mut params = scene.params()?;
     params.integrator.tolerance = TRUTH_TOLERANCE;
     let frequency = match scene.file.excitation.frequency {
@@ -1227,6 +1237,31 @@ mod twin_tests {
             left_out.innovation_ratio > 2.0 * control.innovation_ratio,
             "{left_out:?} vs {control:?}"
         );
+    }
+
+    /// The lab study refuses what it cannot run, naming the field: a scene without the free
+    /// ball, a run that ends before the first episode has ramped up, a bad load model.
+    #[test]
+    fn lab_refuses_scenes_and_options_it_cannot_run() {
+        let load = FilterLoad {
+            step: None,
+            time: 5.0,
+        };
+        let arm = Scene::load(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scenes/mast-arm.toml"
+        ))
+        .expect("scene");
+        let e = lab(&arm, 10.0, 0.05, load).expect_err("beam scene");
+        assert!(e.to_string().contains("kind = \"free\""), "{e}");
+        let e = lab(&Scene::paper(), 1.0, 0.05, load).expect_err("too short");
+        assert!(e.to_string().contains("`--duration`"), "{e}");
+        let bad = FilterLoad {
+            step: Some(f64::NAN),
+            time: 5.0,
+        };
+        let e = lab(&Scene::paper(), 10.0, 0.05, bad).expect_err("NaN load step");
+        assert!(e.to_string().contains("`--load-step`"), "{e}");
     }
 
     #[test]

@@ -23,6 +23,9 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
         );
     }
     if a.lab {
+        if a.emit_firmware.is_some() {
+            bail!("`--emit-firmware` belongs to the twin (the firmware runs the mast arm's estimator), not to `--lab`");
+        }
         let duration = a.duration.unwrap_or(scene.file.duration);
         let mut scene = scene;
         if let Some(f) = a.frequency {
