@@ -31,12 +31,14 @@
 //!
 //! **Linear algebra** (see docs/full-solver.md). The mass matrix `M` is constant and the clamp
 //! fixes the root node, so the augmented system (22) is solved through the free-coordinate mass
-//! matrix `M_f`, factored once per solver by a kept sparse LU ([`sparse`], faer), and the `m ≤ 6`
-//! local constraint rows `G = C_q` (nonzero only on the 10 local coordinates):
-//! `q̈ = M_f⁻¹ f − M_f⁻¹ Gᵀ λ`, `(G M_f⁻¹ Gᵀ) λ = G M_f⁻¹ f + (C_q q̇)_q q̇` (the Schur
-//! complement, `m × m`, from the constant 10 × 10 block of `M_f⁻¹` on the local coordinates). The
-//! reduced Newton matrix (banded, bordered by the ball spin) is factored by the same sparse LU,
-//! symbolic analysis once per partition. **Newton rule**: one Jacobian and factorization per
+//! matrix `M_f`, factored once per solver, and the `m ≤ 6` local constraint rows `G = C_q`
+//! (nonzero only on the 10 local coordinates): `q̈ = M_f⁻¹ f − M_f⁻¹ Gᵀ λ`,
+//! `(G M_f⁻¹ Gᵀ) λ = G M_f⁻¹ f + (C_q q̇)_q q̇` (the Schur complement, `m × m`, from the constant
+//! 10 × 10 block of `M_f⁻¹` on the local coordinates). `M_f` and the reduced Newton matrix are
+//! block tridiagonal (4 × 4 node blocks) with the bodies' border after the end node; both are
+//! factored by a block LU ([`block`]: pivoting inside the node blocks, checked multipliers
+//! across them), with the kept sparse LU ([`sparse`], faer, partial pivoting) as its guarded
+//! fallback and the reference ([`Linear`]). **Newton rule**: one Jacobian and factorization per
 //! solve; a reused factorization must halve the scaled correction of the previous iteration, else
 //! the correction is discarded and the matrix is rebuilt at the same iterate (the core's rule).
 //!
@@ -52,6 +54,7 @@
 //! the core's rule (`absorber_core::newton`) for step solves — one matrix per solve, reused while
 //! it contracts — and a fresh matrix every iteration for static and acceleration solves.
 
+mod block;
 mod flight;
 pub mod kin;
 mod sparse;
@@ -63,9 +66,10 @@ use absorber_core::tip::Chain;
 use absorber_core::{
     Contact, Energies, Error, Impact, ImpactModel, Landing, Params, Side, StepReport,
 };
+pub use block::Linear;
+use block::Matrix;
 use kin::{Bodies, Cons, Mode, MC, NI, NW, PHI, PSI, RB1, RB2, RT1, RT2};
 use nalgebra::{Const, DMatrix, SMatrix, SVector, LU};
-use sparse::{Lu, Order, Pattern};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// Which bodies the full solver models.
@@ -155,7 +159,7 @@ struct Evaluated {
 /// coordinates j present, and their 10 × 10 block `P = E_locᵀ M_f⁻¹ E_loc`.
 #[derive(Clone, Debug)]
 struct MassFactor {
-    lu: Lu,
+    lu: Matrix,
     /// `M_f⁻¹ e_{zloc(j) − 4}`, column `j` at `j·n_f`, zero for absent local coordinates.
     cols: Vec<f64>,
     p_loc: [[f64; NW]; NW],
@@ -169,7 +173,7 @@ struct Work {
     mass: MassFactor,
     /// Reduced Newton matrix, one per partition: `[4N unknowns, 4N + 1 (free ball on the
     /// track), 4N + 3 (ball in flight)]`.
-    reduced: [Option<Lu>; 3],
+    reduced: [Option<Matrix>; 3],
     /// Diagnostics of the last step: the largest radial distance `|r − ρ|` by which a landing
     /// put the ball's centre onto its circle \[m\] (the landing's position error).
     projection: f64,
@@ -179,9 +183,6 @@ use absorber_core::model::{DAMPING_TRIALS, END_BEYOND_STOP, MAX_STEP, START_BEYO
 use absorber_core::newmark::AlphaRecursion;
 use absorber_core::newton::{SETTLE, SLOW};
 use absorber_core::NewtonKind;
-
-/// Column order of the sparse factorizations (docs/full-solver.md compares the two).
-const ORDER: Order = Order::Natural;
 
 /// The full solver (see the module documentation).
 #[derive(Debug)]
@@ -205,6 +206,8 @@ pub struct FullSolver {
     equilibrium: FullState,
     /// The landing of the last step (issue 13).
     last_landing: Option<Landing<f64>>,
+    /// The factorization of the mass and Newton matrices (docs/full-solver.md).
+    linear: Linear,
     work: Mutex<Work>,
 }
 
@@ -226,6 +229,7 @@ impl Clone for FullSolver {
             state: self.state.clone(),
             equilibrium: self.equilibrium.clone(),
             last_landing: self.last_landing,
+            linear: self.linear,
             work: Mutex::new(work),
         }
     }
@@ -328,7 +332,7 @@ impl FullSolver {
             theta_ref: 0.0,
         };
         let me = element.blended_mass_matrix(params.calibration.mass_lumping);
-        let mass = Self::mass_factor(n, n_body, |_| &me, &bodies)?;
+        let mass = Self::mass_factor(n, n_body, |_| &me, &bodies, Linear::Block)?;
         Ok(Self {
             params,
             scene,
@@ -344,6 +348,7 @@ impl FullSolver {
             equilibrium: state.clone(),
             state,
             last_landing: None,
+            linear: Linear::Block,
             work: Mutex::new(Work {
                 mass,
                 reduced: [None, None, None],
@@ -377,7 +382,13 @@ impl FullSolver {
                 )
             })
             .collect();
-        let mass = Self::mass_factor(n_elements, s.n_body, |e| &sections[e].beam.mass, &s.bodies)?;
+        let mass = Self::mass_factor(
+            n_elements,
+            s.n_body,
+            |e| &sections[e].beam.mass,
+            &s.bodies,
+            s.linear,
+        )?;
         s.arm = Some(sections.into());
         *lock(&s.work) = Work {
             mass,
@@ -418,6 +429,27 @@ impl FullSolver {
         Ok(())
     }
 
+    /// Selects the factorization of the mass and Newton matrices: the block LU (the default)
+    /// or the kept sparse LU (faer), the reference (docs/full-solver.md). Results agree to
+    /// rounding.
+    pub fn set_linear(&mut self, linear: Linear) -> Result<(), Error> {
+        let mass = match &self.arm {
+            Some(sec) => Self::mass_factor(
+                self.n,
+                self.n_body,
+                |e| &sec[e].beam.mass,
+                &self.bodies,
+                linear,
+            )?,
+            None => Self::mass_factor(self.n, self.n_body, |_| &self.me, &self.bodies, linear)?,
+        };
+        self.linear = linear;
+        let mut w = lock(&self.work);
+        w.mass = mass;
+        w.reduced = [None, None, None];
+        Ok(())
+    }
+
     /// Element `e`'s properties, mass and bending stiffness matrices.
     fn element_of(&self, e: usize) -> (&Element<f64>, &ElementMatrix<f64>, &ElementMatrix<f64>) {
         match &self.arm {
@@ -437,6 +469,7 @@ impl FullSolver {
         n_body: usize,
         me_of: impl Fn(usize) -> &'m ElementMatrix<f64>,
         bodies: &Bodies,
+        linear: Linear,
     ) -> Result<MassFactor, Error> {
         let nf = 4 * n + n_body;
         // Element e couples z = 4e..4e+8, i.e. free indices 4e−4..4e+4 (root node dropped).
@@ -450,8 +483,7 @@ impl FullSolver {
             })
         });
         let diag = (4 * n..nf).map(|i| (i, i));
-        let pattern = Pattern::new(nf, beam.chain(diag), ORDER).ok_or(Error::Singular)?;
-        let mut lu = Lu::new(Arc::new(pattern));
+        let mut lu = Matrix::new(n, n_body, beam.chain(diag), linear).ok_or(Error::Singular)?;
         for e in 0..n {
             let me = me_of(e);
             for i in 0..8 {
@@ -513,9 +545,9 @@ impl FullSolver {
     /// constraint couples them to the housing), so the band stays that of the beam.
     fn reduced_lu<'w>(
         &self,
-        slots: &'w mut [Option<Lu>; 3],
+        slots: &'w mut [Option<Matrix>; 3],
         ni: usize,
-    ) -> Result<&'w mut Lu, Error> {
+    ) -> Result<&'w mut Matrix, Error> {
         let k = match ni.checked_sub(4 * self.n) {
             Some(0) => 0,
             Some(1) => 1,
@@ -523,7 +555,7 @@ impl FullSolver {
             _ => return Err(Error::Singular),
         };
         let slot = slots.get_mut(k).ok_or(Error::Singular)?;
-        if slot.as_ref().map(Lu::n) != Some(ni) {
+        if slot.as_ref().map(Matrix::n) != Some(ni) {
             let n = self.n;
             let loc0 = 4 * n - 4;
             let beam = (0..n).flat_map(|e| {
@@ -540,8 +572,9 @@ impl FullSolver {
             let local = (0..dense * dense)
                 .map(move |k| (loc0 + k / dense, loc0 + k % dense))
                 .chain((dense..nl).map(move |k| (loc0 + k, loc0 + k)));
-            let pattern = Pattern::new(ni, beam.chain(local), ORDER).ok_or(Error::Singular)?;
-            *slot = Some(Lu::new(Arc::new(pattern)));
+            let mat = Matrix::new(n, ni - 4 * n, beam.chain(local), self.linear)
+                .ok_or(Error::Singular)?;
+            *slot = Some(mat);
         }
         slot.as_mut().ok_or(Error::Singular)
     }
@@ -811,7 +844,7 @@ impl FullSolver {
     fn evaluate(
         &self,
         mass: &mut MassFactor,
-        jac: Option<(&mut Lu, &Chain<f64>)>,
+        jac: Option<(&mut Matrix, &Chain<f64>)>,
         qi: &[f64],
         vi: &[f64],
         ai: &[f64],
@@ -870,17 +903,16 @@ impl FullSolver {
             }
             if let Some((jb, c)) = jac.as_mut() {
                 let je = me * c.c_m + kb * (c.c_q + c.c_v * damp) + kl * c.c_q;
-                for i in 0..8 {
-                    let Some(gi) = (4 * e + i).checked_sub(4) else {
-                        continue;
-                    };
-                    for j in 0..8 {
-                        let Some(gj) = (4 * e + j).checked_sub(4) else {
-                            continue;
-                        };
-                        jb.add(gi, gj, je[(i, j)]);
-                    }
+                // Element e couples free nodes e − 1 and e (the root node is clamped).
+                let sub = |r: usize, col: usize| -> [[f64; 4]; 4] {
+                    core::array::from_fn(|i| core::array::from_fn(|j| je[(r + i, col + j)]))
+                };
+                if e > 0 {
+                    jb.add_block(e - 1, e - 1, &sub(0, 0));
+                    jb.add_block(e - 1, e, &sub(0, 4));
+                    jb.add_block(e, e - 1, &sub(4, 0));
                 }
+                jb.add_block(e, e, &sub(4, 4));
             }
         }
         let b0 = self.b0();
@@ -1980,6 +2012,84 @@ mod tests {
         newton_matrix_is_derivative(&s, Mode::Free);
         // In flight (issue 13): the ball's rows are its mass, the rest as on the track.
         newton_matrix_is_derivative(&s, Mode::Flying);
+    }
+
+    /// The block LU and the kept sparse LU (the reference) solve the real Newton and mass
+    /// matrices of a locked and a free step alike, to rounding, without the block LU's
+    /// fallback; and whole runs with either agree to rounding.
+    #[test]
+    fn block_and_sparse_lu_agree_on_real_steps() {
+        let accel = |k: usize| {
+            let w = 2.0 * core::f64::consts::PI * 3.70;
+            -0.5e-3 * w * w * (w * k as f64 * 0.003).sin()
+        };
+        for scene in [SceneKind::LockedBall, SceneKind::FreeBall] {
+            let mut s = FullSolver::at_rest(Params::default(), scene, 16, 0.0).expect("scene");
+            let mut r = s.clone();
+            r.set_linear(Linear::Sparse).expect("reference");
+            for k in 1..=200 {
+                s.step(accel(k)).expect("step");
+                r.step(accel(k)).expect("reference step");
+            }
+            for (a, b) in s.state.q.iter().zip(r.state.q.iter()) {
+                assert!(
+                    (a - b).abs() <= 1e-10 * (1.0 + b.abs()),
+                    "{scene:?}: {a} vs {b}"
+                );
+            }
+            // The Newton matrix of the next step at the current state.
+            let mode = s.mode(s.state.contact);
+            let ni = s.n_ind(mode);
+            let qi = s.gather_ind(&s.state.q, mode);
+            let vi = s.gather_ind(&s.state.v, mode);
+            let ai = s.gather_ind(&s.state.a, mode);
+            let ch = s.step_chain(s.params.integrator.step);
+            let mut warm = s.local_of(&s.state.q);
+            let mut guard = lock(&s.work);
+            let Work { mass, reduced, .. } = &mut *guard;
+            let lu = s.reduced_lu(reduced, ni).expect("pattern");
+            let ev = s
+                .evaluate(
+                    mass,
+                    Some((&mut *lu, &ch)),
+                    &qi,
+                    &vi,
+                    &ai,
+                    9.81,
+                    mode,
+                    &mut warm,
+                    s.state.theta_ref,
+                )
+                .expect("eval");
+            let mut reference = lu.with_linear(Linear::Sparse);
+            assert!(lu.factor() && reference.factor());
+            assert_eq!(lu.fallbacks(), 0, "{scene:?}");
+            let mut mass_ref = mass.lu.with_linear(Linear::Sparse);
+            assert!(mass_ref.factor());
+            let rhs: [Vec<f64>; 2] = [
+                ev.r.clone(),
+                (0..ni).map(|i| (0.7 * i as f64).sin()).collect(),
+            ];
+            for b in rhs {
+                let (mut x, mut y) = (b.clone(), b);
+                assert!(lu.solve(&mut x) && reference.solve(&mut y));
+                let big = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                for (xa, ya) in x.iter().zip(y.iter()) {
+                    assert!((xa - ya).abs() <= 1e-12 * big, "{scene:?}: {xa} vs {ya}");
+                }
+            }
+            let nf = mass.f.len();
+            let b: Vec<f64> = (0..nf).map(|i| (0.3 * i as f64).cos()).collect();
+            let (mut x, mut y) = (b.clone(), b);
+            assert!(mass.lu.solve(&mut x) && mass_ref.solve(&mut y));
+            let big = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (xa, ya) in x.iter().zip(y.iter()) {
+                assert!(
+                    (xa - ya).abs() <= 1e-12 * big,
+                    "{scene:?} mass: {xa} vs {ya}"
+                );
+            }
+        }
     }
 
     fn newton_matrix_is_derivative(s: &FullSolver, mode: Mode) {
