@@ -303,8 +303,10 @@ impl BlockLu {
                 *x -= *c;
             }
         }
-        self.tail_lu = DenseLu::factor(t, self.s);
-        self.factored = self.tail_lu.is_some();
+        let mut lu = DenseLu::new(self.s);
+        lu.a = t;
+        self.factored = lu.factor();
+        self.tail_lu = Some(lu);
         self.factored
     }
 
@@ -423,80 +425,141 @@ fn lu4(a: &mut Block) -> Option<([usize; 4], [f64; 4])> {
 
 /// Dense LU with partial pivoting of the leading `n × n` part of an `S × S` array (the tail
 /// block; the local constraint Jacobians): `a` holds the unit lower factor below the
-/// diagonal and the upper one on and above, rows in pivot order.
+/// diagonal and the upper one on and above, rows in pivot order. Factored and solved in place
+/// with `n` as a compile-time bound (one instantiation per size: unrolled, no index checks).
 #[derive(Clone, Copy, Debug)]
 pub struct DenseLu<const S: usize> {
-    a: [[f64; S]; S],
+    /// The matrix (set before [`DenseLu::factor`]), then its factors.
+    pub a: [[f64; S]; S],
     perm: [usize; S],
     n: usize,
 }
 
-impl<const S: usize> DenseLu<S> {
-    /// Factors the leading `n × n` part of `a`; `None` if a pivot is zero or not finite (or
-    /// `n > S`).
-    #[allow(clippy::needless_range_loop)] // elimination over fixed arrays, by index
-    pub fn factor(mut a: [[f64; S]; S], n: usize) -> Option<Self> {
-        if n > S {
-            return None;
+/// Calls `$f::<N>` for `N = $n` in 0..=10.
+macro_rules! by_size {
+    ($self:ident, $n:expr, $f:ident ( $($arg:expr),* )) => {
+        match $n {
+            0 => $self.$f::<0>($($arg),*),
+            1 => $self.$f::<1>($($arg),*),
+            2 => $self.$f::<2>($($arg),*),
+            3 => $self.$f::<3>($($arg),*),
+            4 => $self.$f::<4>($($arg),*),
+            5 => $self.$f::<5>($($arg),*),
+            6 => $self.$f::<6>($($arg),*),
+            7 => $self.$f::<7>($($arg),*),
+            8 => $self.$f::<8>($($arg),*),
+            9 => $self.$f::<9>($($arg),*),
+            _ => $self.$f::<10>($($arg),*),
         }
-        let mut perm = [0; S];
-        for (i, p) in perm.iter_mut().enumerate() {
+    };
+}
+
+impl<const S: usize> DenseLu<S> {
+    /// The zero `n × n` matrix (`n ≤ min(S, 10)`, else [`DenseLu::factor`] fails).
+    pub fn new(n: usize) -> Self {
+        Self {
+            a: [[0.0; S]; S],
+            perm: [0; S],
+            n,
+        }
+    }
+
+    /// Factors `a` in place; false if a pivot is zero or not finite (or `n` is too large).
+    pub fn factor(&mut self) -> bool {
+        if self.n > S || self.n > 10 {
+            return false;
+        }
+        by_size!(self, self.n, factor_n())
+    }
+
+    // The loops below run over constant ranges with the triangular bounds as conditions, so
+    // that the compiler unrolls them completely for each `N` (a triangular range would be left
+    // as a loop with index checks).
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // elimination over fixed arrays, by index
+    fn factor_n<const N: usize>(&mut self) -> bool {
+        if N > S {
+            return false;
+        }
+        let a = &mut self.a;
+        for (i, p) in self.perm.iter_mut().enumerate() {
             *p = i;
         }
-        for k in 0..n {
+        for k in 0..N {
             let mut p = k;
             let mut big = a[k][k].abs();
-            for i in k + 1..n {
-                let v = a[i][k].abs();
-                if v > big {
-                    big = v;
-                    p = i;
+            for i in 0..N {
+                if i > k {
+                    let v = a[i][k].abs();
+                    if v > big {
+                        big = v;
+                        p = i;
+                    }
                 }
             }
             if !(big > 0.0 && big.is_finite()) {
-                return None;
+                return false;
             }
             if p != k {
                 a.swap(p, k);
-                perm.swap(p, k);
+                self.perm.swap(p, k);
             }
+            let r = 1.0 / a[k][k];
             let pivot_row = a[k];
-            let r = 1.0 / pivot_row[k];
-            for i in k + 1..n {
-                let l = a[i][k] * r;
-                a[i][k] = l;
-                for c in k + 1..n {
-                    a[i][c] -= l * pivot_row[c];
+            for i in 0..N {
+                if i > k {
+                    let l = a[i][k] * r;
+                    a[i][k] = l;
+                    for c in 0..N {
+                        if c > k {
+                            a[i][c] -= l * pivot_row[c];
+                        }
+                    }
                 }
             }
         }
-        Some(Self { a, perm, n })
+        true
     }
 
-    /// Solves in place (the leading `n` entries of `z`).
-    #[allow(clippy::needless_range_loop)]
+    /// Solves in place (the leading `n` entries of `z`) with the factors.
     pub fn solve(&self, z: &mut [f64; S]) {
-        let n = self.n;
+        if self.n > S || self.n > 10 {
+            return;
+        }
+        by_size!(self, self.n, solve_n(z))
+    }
+
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
+    fn solve_n<const N: usize>(&self, z: &mut [f64; S]) {
+        if N > S {
+            return;
+        }
         let a = &self.a;
         let mut y = [0.0; S];
-        for i in 0..n {
+        for i in 0..N {
             y[i] = z[self.perm[i]];
         }
-        for i in 1..n {
+        for i in 0..N {
             let mut x = y[i];
-            for k in 0..i {
-                x -= a[i][k] * y[k];
+            for k in 0..N {
+                if k < i {
+                    x -= a[i][k] * y[k];
+                }
             }
             y[i] = x;
         }
-        for i in (0..n).rev() {
+        for ii in 0..N {
+            let i = N - 1 - ii;
             let mut x = y[i];
-            for k in i + 1..n {
-                x -= a[i][k] * y[k];
+            for k in 0..N {
+                if k > i {
+                    x -= a[i][k] * y[k];
+                }
             }
             y[i] = x / a[i][i];
         }
-        z[..n].copy_from_slice(&y[..n]);
+        z[..N].copy_from_slice(&y[..N]);
     }
 }
 

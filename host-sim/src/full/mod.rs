@@ -60,16 +60,16 @@ pub mod kin;
 mod sparse;
 
 use crate::sim::{Observation, Simulator};
-use absorber_core::ancf::{Element, ElementMatrix, ElementVector};
+use absorber_core::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector};
 use absorber_core::loads::{arm_section, ArmParams, Section};
 use absorber_core::tip::Chain;
 use absorber_core::{
     Contact, Energies, Error, Impact, ImpactModel, Landing, Params, Side, StepReport,
 };
 pub use block::Linear;
-use block::Matrix;
+use block::{DenseLu, Matrix};
 use kin::{Bodies, Cons, Mode, MC, NI, NW, PHI, PSI, RB1, RB2, RT1, RT2};
-use nalgebra::{Const, DMatrix, SMatrix, SVector, LU};
+use nalgebra::DMatrix;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// Which bodies the full solver models.
@@ -144,7 +144,7 @@ struct Kin {
     w: [f64; NW],
     wd: [f64; NW],
     cons: Cons,
-    lu_dep: LU<f64, Const<MC>, Const<MC>>,
+    lu_dep: DenseLu<MC>,
     bd: [[f64; NI]; MC],
 }
 
@@ -165,6 +165,9 @@ struct MassFactor {
     p_loc: [[f64; NW]; NW],
     /// Scratch of length `n_f` (the force, then the accelerations).
     f: Vec<f64>,
+    /// Scratch of length `n_z`: `B δ` and `M B δ` of the residual.
+    y: Vec<f64>,
+    my: Vec<f64>,
 }
 
 /// Factorizations kept between solves (behind a mutex: the solver's methods take `&self`).
@@ -208,6 +211,8 @@ pub struct FullSolver {
     last_landing: Option<Landing<f64>>,
     /// The factorization of the mass and Newton matrices (docs/full-solver.md).
     linear: Linear,
+    /// Per-element assembly constants: one for the uniform beam, one per element of an arm.
+    consts: Arc<[ElementConst]>,
     work: Mutex<Work>,
 }
 
@@ -230,6 +235,7 @@ impl Clone for FullSolver {
             equilibrium: self.equilibrium.clone(),
             last_landing: self.last_landing,
             linear: self.linear,
+            consts: Arc::clone(&self.consts),
             work: Mutex::new(work),
         }
     }
@@ -241,13 +247,63 @@ fn lock(w: &Mutex<Work>) -> MutexGuard<'_, Work> {
     w.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-fn small_solve(a: &SMatrix<f64, MC, MC>, b: SVector<f64, MC>) -> Option<SVector<f64, MC>> {
-    let x = a.lu().solve(&b)?;
-    if x.iter().all(|v| v.is_finite()) {
-        Some(x)
-    } else {
-        None
+/// The 4 × 4 block of `b` from row `r`, column `c`.
+fn quarter(b: &[[f64; 8]; 8], r: usize, c: usize) -> [[f64; 4]; 4] {
+    let mut q = [[0.0; 4]; 4];
+    for (dst, src) in q.iter_mut().zip(b.iter().skip(r)) {
+        for (d, s) in dst.iter_mut().zip(src.iter().skip(c)) {
+            *d = *s;
+        }
     }
+    q
+}
+
+/// `M₄` if `m = M₄ ⊗ I₂` exactly (the ANCF cable's mass and bending matrices are).
+fn kron4(m: &ElementMatrix<f64>) -> Option<[[f64; 4]; 4]> {
+    let mut k = [[0.0; 4]; 4];
+    for (i, row) in k.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            let (a, b) = (2 * i, 2 * j);
+            let v = m[(a, b)];
+            if m[(a + 1, b + 1)] != v || m[(a, b + 1)] != 0.0 || m[(a + 1, b)] != 0.0 {
+                return None;
+            }
+            *x = v;
+        }
+    }
+    Some(k)
+}
+
+type Block4 = [[f64; 4]; 4];
+
+/// Constants of one element's assembly: the axial quadrature, and `(M₄, K₄)` when the mass
+/// and bending matrices are `M₄ ⊗ I₂`, `K₄ ⊗ I₂` exactly (then the Newton block is built in
+/// that form, the same sums: [`absorber_core::ancf::AxialQuadrature::tangent_block`]).
+#[derive(Clone, Copy, Debug)]
+struct ElementConst {
+    quad: AxialQuadrature<f64>,
+    kron: Option<(Block4, Block4)>,
+}
+
+impl ElementConst {
+    fn of(element: &Element<f64>, me: &ElementMatrix<f64>, kb: &ElementMatrix<f64>) -> Self {
+        Self {
+            quad: element.axial_quadrature(),
+            kron: kron4(me).zip(kron4(kb)),
+        }
+    }
+}
+
+/// Solves the leading `m × m` system of `a` for `b` (the rest of `b` zero); `None` if it is
+/// singular or the result not finite.
+fn small_solve(a: [[f64; MC]; MC], m: usize, mut b: [f64; MC]) -> Option<[f64; MC]> {
+    let mut lu = DenseLu::new(m);
+    lu.a = a;
+    if !lu.factor() {
+        return None;
+    }
+    lu.solve(&mut b);
+    b.iter().all(|v| v.is_finite()).then_some(b)
 }
 
 impl FullSolver {
@@ -332,6 +388,7 @@ impl FullSolver {
             theta_ref: 0.0,
         };
         let me = element.blended_mass_matrix(params.calibration.mass_lumping);
+        let kb = element.bending_stiffness();
         let mass = Self::mass_factor(n, n_body, |_| &me, &bodies, Linear::Block)?;
         Ok(Self {
             params,
@@ -339,7 +396,7 @@ impl FullSolver {
             n,
             element,
             me,
-            kb: element.bending_stiffness(),
+            kb,
             arm: None,
             loads: None,
             bodies,
@@ -349,6 +406,7 @@ impl FullSolver {
             state,
             last_landing: None,
             linear: Linear::Block,
+            consts: Arc::new([ElementConst::of(&element, &me, &kb)]),
             work: Mutex::new(Work {
                 mass,
                 reduced: [None, None, None],
@@ -389,6 +447,10 @@ impl FullSolver {
             &s.bodies,
             s.linear,
         )?;
+        s.consts = sections
+            .iter()
+            .map(|sec| ElementConst::of(&sec.beam.element, &sec.beam.mass, &sec.beam.stiffness))
+            .collect();
         s.arm = Some(sections.into());
         *lock(&s.work) = Work {
             mass,
@@ -448,6 +510,12 @@ impl FullSolver {
         w.mass = mass;
         w.reduced = [None, None, None];
         Ok(())
+    }
+
+    /// Element `e`'s assembly constants.
+    fn element_const(&self, e: usize) -> &ElementConst {
+        let k = if self.consts.len() == 1 { 0 } else { e };
+        &self.consts[k.min(self.consts.len() - 1)]
     }
 
     /// Element `e`'s properties, mass and bending stiffness matrices.
@@ -535,6 +603,8 @@ impl FullSolver {
             cols,
             p_loc,
             f: vec![0.0; nf],
+            y: vec![0.0; nf + 4],
+            my: vec![0.0; nf + 4],
         })
     }
 
@@ -666,7 +736,12 @@ impl FullSolver {
     }
 
     fn gather_ind(&self, z: &[f64], mode: Mode) -> Vec<f64> {
-        (0..self.n_ind(mode)).map(|i| z[self.ind_to_z(i)]).collect()
+        let nb = 4 * self.n;
+        let ni = self.n_ind(mode);
+        let mut out = Vec::with_capacity(ni);
+        out.extend_from_slice(&z[4..4 + nb]);
+        out.extend((nb..ni).map(|i| z[self.ind_to_z(i)]));
+        out
     }
 
     fn local_of(&self, z: &[f64]) -> [f64; NW] {
@@ -693,6 +768,22 @@ impl FullSolver {
         warm: &[f64; NW],
         theta_ref: f64,
     ) -> Result<Kin, Error> {
+        self.local_kin_with(mode, qi, vi, warm, theta_ref, None)
+    }
+
+    /// [`FullSolver::local_kin`]; with `chord`, the iterations on `C = 0` use that LU of `C_d`
+    /// (from a configuration close by: the finite differences of the Newton matrix) instead of
+    /// refactoring at each iterate: the same root, to rounding, and `C_d` is factored once, at
+    /// the converged positions.
+    fn local_kin_with(
+        &self,
+        mode: Mode,
+        qi: &[f64],
+        vi: &[f64],
+        warm: &[f64; NW],
+        theta_ref: f64,
+        chord: Option<&DenseLu<MC>>,
+    ) -> Result<Kin, Error> {
         let ind = mode.independent();
         let dep = mode.dependent();
         let m = mode.m();
@@ -702,75 +793,90 @@ impl FullSolver {
             w[j] = qi.get(k).copied().unwrap_or(0.0);
             wd[j] = vi.get(k).copied().unwrap_or(0.0);
         }
-        let build = |c: &Cons| {
-            let mut a = SMatrix::<f64, MC, MC>::identity();
-            for r in 0..m {
-                for (col, &j) in dep.iter().enumerate() {
-                    a[(r, col)] = c.grad[r][j];
+        // C_d: the gradients' dependent columns (m × m, leading part of the array).
+        let build = |c: &Cons, lu: &mut DenseLu<MC>| {
+            for (row, grad) in lu.a.iter_mut().zip(c.grad.iter()).take(m) {
+                for (x, &j) in row.iter_mut().zip(dep.iter()) {
+                    *x = grad[j];
                 }
             }
-            a
+            lu.factor()
         };
-        let zero = [0.0; NW];
+        // Newton–Raphson on C(w) = 0 for the dependent coordinates; the loop ends at the
+        // converged w with its constraints and the LU of C_d there (the one shared below).
         let mut converged = m == 0;
         let mut last: f64 = 0.0;
-        for _ in 0..60 {
+        let mut iterations = 0;
+        let mut c0 = Cons::ZERO;
+        let mut lu_dep = DenseLu::<MC>::new(m);
+        loop {
+            self.bodies.values_into(&w, mode, theta_ref, &mut c0);
+            if (converged || chord.is_none()) && !build(&c0, &mut lu_dep) {
+                return Err(Error::Singular);
+            }
             if converged {
                 break;
             }
-            let c = self.bodies.constraints(&w, &zero, mode, theta_ref);
-            let mut rhs = SVector::<f64, MC>::zeros();
-            for r in 0..m {
-                rhs[r] = -c.val[r];
+            if iterations == 60 {
+                // The constraint solve for the dependent coordinates (tip pose, ball centre).
+                return Err(Error::NoConvergence {
+                    iterations: 60,
+                    increment: last,
+                });
             }
-            let dx = small_solve(&build(&c), rhs).ok_or(Error::Singular)?;
+            let mut dx = [0.0; MC];
+            for (d, v) in dx.iter_mut().zip(c0.val.iter()).take(m) {
+                *d = -v;
+            }
+            chord.unwrap_or(&lu_dep).solve(&mut dx);
+            if !dx.iter().all(|v| v.is_finite()) {
+                return Err(Error::Singular);
+            }
             let mut inc: f64 = 0.0;
-            for (r, &j) in dep.iter().enumerate() {
-                w[j] += dx[r];
-                inc = inc.max(dx[r].abs() / self.bodies.scale(j));
+            for (d, &j) in dx.iter().zip(dep.iter()) {
+                w[j] += d;
+                inc = inc.max(d.abs() / self.bodies.scale(j));
             }
             if !inc.is_finite() {
                 return Err(Error::NonFiniteState);
             }
             converged = inc <= 1e-13;
             last = inc;
+            iterations += 1;
         }
-        if !converged {
-            // The constraint solve for the dependent coordinates (tip pose, ball centre).
-            return Err(Error::NoConvergence {
-                iterations: 60,
-                increment: last,
-            });
-        }
-        let c0 = self.bodies.constraints(&w, &zero, mode, theta_ref);
-        let lu_dep = build(&c0).lu();
         let mut bd = [[0.0; NI]; MC];
         if m > 0 {
-            let lu = &lu_dep;
-            let mut rhs = SVector::<f64, MC>::zeros();
-            for r in 0..m {
-                rhs[r] = -ind.iter().map(|&j| c0.grad[r][j] * wd[j]).sum::<f64>();
+            let mut rhs = [0.0; MC];
+            for (x, grad) in rhs.iter_mut().zip(c0.grad.iter()).take(m) {
+                *x = -ind.iter().map(|&j| grad[j] * wd[j]).sum::<f64>();
             }
-            let vd = lu.solve(&rhs).ok_or(Error::Singular)?;
-            for (r, &j) in dep.iter().enumerate() {
-                wd[j] = vd[r];
+            lu_dep.solve(&mut rhs);
+            if !rhs.iter().all(|v| v.is_finite()) {
+                return Err(Error::Singular);
+            }
+            for (x, &j) in rhs.iter().zip(dep.iter()) {
+                wd[j] = *x;
             }
             for (k, &jk) in ind.iter().enumerate() {
-                let mut rhs = SVector::<f64, MC>::zeros();
-                for r in 0..m {
-                    rhs[r] = -c0.grad[r][jk];
+                let mut col = [0.0; MC];
+                for (x, grad) in col.iter_mut().zip(c0.grad.iter()).take(m) {
+                    *x = -grad[jk];
                 }
-                let col = lu.solve(&rhs).ok_or(Error::Singular)?;
-                for r in 0..m {
-                    bd[r][k] = col[r];
+                lu_dep.solve(&mut col);
+                if !col.iter().all(|v| v.is_finite()) {
+                    return Err(Error::Singular);
+                }
+                for (row, x) in bd.iter_mut().zip(col.iter()).take(m) {
+                    row[k] = *x;
                 }
             }
         }
-        let cons = self.bodies.constraints(&w, &wd, mode, theta_ref);
+        // The constraints with the velocities: values and gradients are those at rest.
+        c0.quad = self.bodies.quad(&w, &wd, mode);
         Ok(Kin {
             w,
             wd,
-            cons,
+            cons: c0,
             lu_dep,
             bd,
         })
@@ -786,19 +892,15 @@ impl FullSolver {
             wdd[j] = ai.get(k).copied().unwrap_or(0.0);
         }
         if m > 0 {
-            let mut rhs = SVector::<f64, MC>::zeros();
-            for r in 0..m {
-                rhs[r] = -kin.cons.quad[r]
-                    - ind
-                        .iter()
-                        .map(|&j| kin.cons.grad[r][j] * wdd[j])
-                        .sum::<f64>();
+            let mut x = [0.0; MC];
+            let rows = kin.cons.quad.iter().zip(kin.cons.grad.iter());
+            for (xr, (quad, grad)) in x.iter_mut().zip(rows).take(m) {
+                *xr = -quad - ind.iter().map(|&j| grad[j] * wdd[j]).sum::<f64>();
             }
-            let x = kin
-                .lu_dep
-                .solve(&rhs)
-                .filter(|x| x.iter().all(|v| v.is_finite()))
-                .ok_or(Error::Singular)?;
+            kin.lu_dep.solve(&mut x);
+            if !x.iter().all(|v| v.is_finite()) {
+                return Err(Error::Singular);
+            }
             for (r, &j) in dep.iter().enumerate() {
                 wdd[j] = x[r];
             }
@@ -887,7 +989,50 @@ impl FullSolver {
                 ud[i] = zval(4 * e + i, vi);
             }
             let (element, me, kb) = self.element_of(e);
-            let (ql, kl) = element.axial_force_and_tangent(&u);
+            let ec = self.element_const(e);
+            // Axial force, and with the matrix the element's Newton block
+            // `c_m M + (c_q + c_v c) K_t + c_q K_l` (the same sums as the dense form).
+            let ql = match jac.as_mut() {
+                None => ec.quad.force(&u),
+                Some((jb, c)) => {
+                    let mut block = [[0.0; 8]; 8];
+                    let ql = match &ec.kron {
+                        Some((m4, k4)) => {
+                            let c_k = c.c_q + c.c_v * damp;
+                            let mut linear = [[0.0; 4]; 4];
+                            for (lr, (mr, kr)) in linear.iter_mut().zip(m4.iter().zip(k4.iter())) {
+                                for (l, (m, k)) in lr.iter_mut().zip(mr.iter().zip(kr.iter())) {
+                                    *l = *m * c.c_m + *k * c_k;
+                                }
+                            }
+                            ec.quad.tangent_block(&u, &linear, c.c_q, &mut block)
+                        }
+                        None => {
+                            let mut kl = ElementMatrix::<f64>::zeros();
+                            let ql = ec.quad.tangent(&u, |r, col, v| {
+                                if let Some(t) = kl.get_mut((r, col)) {
+                                    *t = v;
+                                }
+                            });
+                            let je = me * c.c_m + kb * (c.c_q + c.c_v * damp) + kl * c.c_q;
+                            for (i, row) in block.iter_mut().enumerate() {
+                                for (j, x) in row.iter_mut().enumerate() {
+                                    *x = je[(i, j)];
+                                }
+                            }
+                            ql
+                        }
+                    };
+                    // Element e couples free nodes e − 1 and e (the root node is clamped).
+                    if e > 0 {
+                        jb.add_block(e - 1, e - 1, &quarter(&block, 0, 0));
+                        jb.add_block(e - 1, e, &quarter(&block, 0, 4));
+                        jb.add_block(e, e - 1, &quarter(&block, 4, 0));
+                    }
+                    jb.add_block(e, e, &quarter(&block, 4, 4));
+                    ql
+                }
+            };
             let mut applied = match &self.arm {
                 Some(sec) => sec[e].weight(g_eff),
                 None => weight,
@@ -900,19 +1045,6 @@ impl FullSolver {
                 if let Some(fi) = (4 * e + i).checked_sub(4) {
                     f[fi] += fe[i];
                 }
-            }
-            if let Some((jb, c)) = jac.as_mut() {
-                let je = me * c.c_m + kb * (c.c_q + c.c_v * damp) + kl * c.c_q;
-                // Element e couples free nodes e − 1 and e (the root node is clamped).
-                let sub = |r: usize, col: usize| -> [[f64; 4]; 4] {
-                    core::array::from_fn(|i| core::array::from_fn(|j| je[(r + i, col + j)]))
-                };
-                if e > 0 {
-                    jb.add_block(e - 1, e - 1, &sub(0, 0));
-                    jb.add_block(e - 1, e, &sub(0, 4));
-                    jb.add_block(e, e - 1, &sub(4, 0));
-                }
-                jb.add_block(e, e, &sub(4, 4));
             }
         }
         let b0 = self.b0();
@@ -934,15 +1066,15 @@ impl FullSolver {
         let mut lambda_local = [0.0; MC];
         if m > 0 {
             let g = &kin.cons.grad;
-            let mut s = SMatrix::<f64, MC, MC>::identity();
-            let mut rhs = SVector::<f64, MC>::zeros();
+            let mut s = [[0.0; MC]; MC];
+            let mut rhs = [0.0; MC];
             for k in 0..m {
                 let mut gp = [0.0; NW];
                 for (j, gpj) in gp.iter_mut().enumerate() {
                     *gpj = (0..NW).map(|i| g[k][i] * mass.p_loc[i][j]).sum();
                 }
                 for l in 0..m {
-                    s[(k, l)] = (0..NW).map(|j| gp[j] * g[l][j]).sum();
+                    s[k][l] = (0..NW).map(|j| gp[j] * g[l][j]).sum();
                 }
                 rhs[k] = (0..NW)
                     .filter(|&j| present(j))
@@ -950,7 +1082,7 @@ impl FullSolver {
                     .sum::<f64>()
                     + kin.cons.quad[k];
             }
-            let lam = small_solve(&s, rhs).ok_or(Error::Singular)?;
+            let lam = small_solve(s, m, rhs).ok_or(Error::Singular)?;
             for j in (0..NW).filter(|&j| present(j)) {
                 let gl: f64 = (0..m).map(|k| g[k][j] * lam[k]).sum();
                 if gl != 0.0 {
@@ -964,33 +1096,57 @@ impl FullSolver {
         }
         // z̈ (root node clamped at rest).
         let zdd = |z: usize| if z < 4 { 0.0 } else { f[z - 4] };
-        // r = Bᵀ M B δ with δ = x − q̈_i(augmented).
-        let delta: Vec<f64> = (0..ni).map(|i| ai[i] - zdd(self.ind_to_z(i))).collect();
-        let mut y = vec![0.0; nz];
-        for (i, d) in delta.iter().enumerate() {
-            y[self.ind_to_z(i)] = *d;
+        // r = Bᵀ M B δ with δ = x − q̈_i(augmented), y = B δ (kept scratch vectors of length nz).
+        let (y, my) = (&mut mass.y, &mut mass.my);
+        y.fill(0.0);
+        let nb = 4 * n;
+        for (yi, (a, fi)) in y.iter_mut().skip(4).zip(ai.iter().zip(f.iter())).take(nb) {
+            *yi = a - fi;
+        }
+        for (i, a) in ai.iter().enumerate().skip(nb) {
+            let z = self.ind_to_z(i);
+            y[z] = a - zdd(z);
         }
         let dep = mode.dependent();
         for (row, &j) in dep.iter().enumerate() {
             y[self.zloc(j)] = (0..mode.independent().len())
-                .map(|k| kin.bd[row][k] * delta[loc0 + k])
+                .map(|k| kin.bd[row][k] * y[self.ind_to_z(loc0 + k)])
                 .sum();
         }
-        let mut my = vec![0.0; nz];
+        my.fill(0.0);
         for e in 0..n {
-            let me = self.element_of(e).1;
-            for i in 0..8 {
-                let mut s = 0.0;
-                for j in 0..8 {
-                    s += me[(i, j)] * y[4 * e + j];
+            let ye = &y[4 * e..4 * e + 8];
+            match &self.element_const(e).kron {
+                // The same sums without the zero entries of M₄ ⊗ I₂ (exactly the same values).
+                Some((m4, _)) => {
+                    for (p, mr) in m4.iter().enumerate() {
+                        for d in 0..2 {
+                            let mut s = 0.0;
+                            for (q, m) in mr.iter().enumerate() {
+                                s += m * ye[2 * q + d];
+                            }
+                            my[4 * e + 2 * p + d] += s;
+                        }
+                    }
                 }
-                my[4 * e + i] += s;
+                None => {
+                    let me = self.element_of(e).1;
+                    for i in 0..8 {
+                        let mut s = 0.0;
+                        for (j, yj) in ye.iter().enumerate() {
+                            s += me[(i, j)] * yj;
+                        }
+                        my[4 * e + i] += s;
+                    }
+                }
             }
         }
         for jb in 0..self.n_body {
             my[b0 + jb] += self.bodies.mass[4 + jb] * y[b0 + jb];
         }
-        let mut r: Vec<f64> = (0..ni).map(|i| my[self.ind_to_z(i)]).collect();
+        let mut r: Vec<f64> = Vec::with_capacity(ni);
+        r.extend_from_slice(&my[4..4 + nb]);
+        r.extend((nb..ni).map(|i| my[self.ind_to_z(i)]));
         for k in 0..mode.independent().len() {
             r[loc0 + k] += dep
                 .iter()
@@ -1018,14 +1174,31 @@ impl FullSolver {
                     let eps = 1e-6 * s / denom;
                     let mut cols = [[0.0; NI]; 2];
                     for (side, sign) in [(0usize, 1.0f64), (1, -1.0)] {
-                        let mut q = qi[loc0..].to_vec();
-                        let mut v = vi[loc0..].to_vec();
-                        let mut a = ai[loc0..].to_vec();
+                        let (mut q, mut v, mut a) = ([0.0; NI], [0.0; NI], [0.0; NI]);
+                        for (dst, src) in [(&mut q, qi), (&mut v, vi), (&mut a, ai)] {
+                            for (d, s) in dst.iter_mut().zip(src.iter().skip(loc0)) {
+                                *d = *s;
+                            }
+                        }
                         q[k] += sign * eps * c.c_q;
                         v[k] += sign * eps * c.c_v;
                         a[k] += sign * eps * c.c_m;
-                        let kp = self.local_kin(mode, &q, &v, &kin.w, theta_ref)?;
-                        cols[side] = self.local_residual(&kp, mode, &a, g_eff)?;
+                        // Start from the first-order prediction w_d + B_d δq_i, iterate with
+                        // the unperturbed C_d (a chord): one factorization, at the end.
+                        let mut pred = kin.w;
+                        let dq = q[k] - qi[loc0 + k];
+                        for (row, &j) in mode.dependent().iter().enumerate() {
+                            pred[j] += kin.bd[row][k] * dq;
+                        }
+                        let kp = self.local_kin_with(
+                            mode,
+                            &q[..nl],
+                            &v[..nl],
+                            &pred,
+                            theta_ref,
+                            Some(&kin.lu_dep),
+                        )?;
+                        cols[side] = self.local_residual(&kp, mode, &a[..nl], g_eff)?;
                     }
                     for (row, (p, m)) in
                         cols[0].iter().zip(cols[1].iter()).enumerate().take(coupled)
@@ -1080,10 +1253,18 @@ impl FullSolver {
         let mut previous = 0.0;
         let mut increment = 0.0;
         let mut dx = vec![0.0; ni];
+        let (mut q, mut v, mut a) = (vec![0.0; ni], vec![0.0; ni], vec![0.0; ni]);
         for it in 1..=max {
-            let q: Vec<f64> = (0..ni).map(|i| q0[i] + ch.c_q * x[i]).collect();
-            let v: Vec<f64> = (0..ni).map(|i| v0[i] + ch.c_v * x[i]).collect();
-            let a: Vec<f64> = (0..ni).map(|i| a0[i] + ch.c_m * x[i]).collect();
+            for (((qi, vi), ai), ((xi, q0i), (v0i, a0i))) in q
+                .iter_mut()
+                .zip(v.iter_mut())
+                .zip(a.iter_mut())
+                .zip(x.iter().zip(q0.iter()).zip(v0.iter().zip(a0.iter())))
+            {
+                *qi = q0i + ch.c_q * xi;
+                *vi = v0i + ch.c_v * xi;
+                *ai = a0i + ch.c_m * xi;
+            }
             let fresh = !factored || refresh || full;
             let jac = if fresh { Some((&mut *lu, ch)) } else { None };
             let ev = self.evaluate(mass, jac, &q, &v, &a, g_eff, mode, warm, theta_ref)?;
@@ -1195,9 +1376,26 @@ impl FullSolver {
         base_accel: f64,
         contact: Contact,
     ) -> Result<FullState, Error> {
-        let loc0 = 4 * self.n - 4;
         let warm = self.local_of(&prev.q);
-        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], &warm, prev.theta_ref)?;
+        self.complete_warm(qi, vi, ai, mode, prev, &warm, time, base_accel, contact)
+    }
+
+    /// [`FullSolver::complete`] with the dependent positions' iteration started at `warm`.
+    #[allow(clippy::too_many_arguments)]
+    fn complete_warm(
+        &self,
+        qi: &[f64],
+        vi: &[f64],
+        ai: &[f64],
+        mode: Mode,
+        prev: &FullState,
+        warm: &[f64; NW],
+        time: f64,
+        base_accel: f64,
+        contact: Contact,
+    ) -> Result<FullState, Error> {
+        let loc0 = 4 * self.n - 4;
+        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], warm, prev.theta_ref)?;
         let wdd = self.local_accel(&kin, mode, &ai[loc0..])?;
         let mut s = FullState {
             q: vec![0.0; self.nz],
@@ -1393,17 +1591,20 @@ impl FullSolver {
         let ni = qi.len();
         // Generalized-α: the known part of a_{n+1}.
         let known: Vec<f64> = match alpha {
-            Some(g) => (0..ni)
-                .map(|i| g.from_accel * ai[i] + g.from_pseudo * pai[i])
+            Some(g) => ai
+                .iter()
+                .zip(pai.iter())
+                .map(|(a, p)| g.from_accel * a + g.from_pseudo * p)
                 .collect(),
             None => vec![0.0; ni],
         };
-        let mut q_pred: Vec<f64> = (0..ni)
-            .map(|i| qi[i] + vi[i] * h + pai[i] * (h * h * (0.5 - it.beta)))
+        let (cq, cv) = (h * h * (0.5 - it.beta), h * (1.0 - it.gamma));
+        let mut q_pred: Vec<f64> = qi
+            .iter()
+            .zip(vi.iter().zip(pai.iter()))
+            .map(|(q, (v, p))| q + v * h + p * cq)
             .collect();
-        let mut v_pred: Vec<f64> = (0..ni)
-            .map(|i| vi[i] + pai[i] * (h * (1.0 - it.gamma)))
-            .collect();
+        let mut v_pred: Vec<f64> = vi.iter().zip(pai.iter()).map(|(v, p)| v + p * cv).collect();
         if alpha.is_some() {
             for i in 0..ni {
                 q_pred[i] += known[i] * (it.beta * h * h);
@@ -1412,7 +1613,12 @@ impl FullSolver {
         }
         let ch = self.step_chain(h);
         let z = vec![0.0; ni];
+        // The dependent positions' iteration starts from their Taylor prediction.
         let mut warm = self.local_of(&s.q);
+        let (wv, wa) = (self.local_of(&s.v), self.local_of(&s.a));
+        for &j in mode.dependent() {
+            warm[j] += h * wv[j] + 0.5 * h * h * wa[j];
+        }
         let solved = self.newton(
             &q_pred,
             &v_pred,
@@ -1427,9 +1633,28 @@ impl FullSolver {
             self.params.integrator.newton == NewtonKind::Full,
         )?;
         let a = &solved.x;
-        let qn: Vec<f64> = (0..ni).map(|i| q_pred[i] + a[i] * ch.c_q).collect();
-        let vn: Vec<f64> = (0..ni).map(|i| v_pred[i] + a[i] * ch.c_v).collect();
-        let mut next = self.complete(&qn, &vn, a, mode, s, s.time + h, base_accel, s.contact)?;
+        let qn: Vec<f64> = q_pred
+            .iter()
+            .zip(a.iter())
+            .map(|(q, x)| q + x * ch.c_q)
+            .collect();
+        let vn: Vec<f64> = v_pred
+            .iter()
+            .zip(a.iter())
+            .map(|(v, x)| v + x * ch.c_v)
+            .collect();
+        // The dependent positions start from those of the last Newton iterate.
+        let mut next = self.complete_warm(
+            &qn,
+            &vn,
+            a,
+            mode,
+            s,
+            &warm,
+            s.time + h,
+            base_accel,
+            s.contact,
+        )?;
         if let Some(g) = alpha {
             for i in 0..ni {
                 next.pa[self.ind_to_z(i)] = known[i] + g.ratio * a[i];
