@@ -191,46 +191,46 @@ impl BlockLu {
         }
     }
 
-    /// Adds the 4 × 4 block `b` at node rows `k`, node columns `l` (`|k − l| ≤ 1`; node
-    /// `m`, the last, is the tail's first four unknowns).
+    /// Adds an element's 8 × 8 block: rows/columns 0..4 node `e − 1`, 4..8 node `e` (the
+    /// first four skipped for `e = 0`, the clamped root).
     #[inline]
-    pub fn add_block(&mut self, k: usize, l: usize, b: &Block) -> bool {
+    pub fn add_element(&mut self, e: usize, b: &[[f64; 8]; 8]) -> bool {
         self.factored = false;
         let m = self.m;
-        let dst: &mut Block = if k == l && k < m {
-            match self.diag.get_mut(k) {
-                Some(d) => d,
-                None => return false,
-            }
-        } else if k == l && k == m {
-            for (row, src) in self.tail.iter_mut().zip(b.iter()) {
-                for (d, s) in row.iter_mut().zip(src.iter()) {
+        if e > m {
+            return false;
+        }
+        // Adds the quarter of `b` at (r0, c0) into `dst` (4 × 4 window of rows of `dst`).
+        fn put<const W: usize>(dst: &mut [[f64; W]], b: &[[f64; 8]; 8], r0: usize, c0: usize) {
+            for (row, src) in dst.iter_mut().zip(b.iter().skip(r0)) {
+                for (d, s) in row.iter_mut().zip(src.iter().skip(c0).take(4)) {
                     *d += *s;
                 }
             }
-            return true;
-        } else if l == k + 1 && l <= m {
-            match self.upper.get_mut(k) {
-                Some(d) => d,
-                None => return false,
+        }
+        if e > 0 {
+            let k = e - 1;
+            if let Some(d) = self.diag.get_mut(k) {
+                put(d, b, 0, 0);
             }
-        } else if k == l + 1 && k <= m {
-            match self.lower.get_mut(l) {
-                Some(d) => d,
-                None => return false,
+            if let Some(u) = self.upper.get_mut(k) {
+                put(u, b, 0, 4);
+            }
+            if let Some(l) = self.lower.get_mut(k) {
+                put(l, b, 4, 0);
+            }
+        }
+        if e < m {
+            if let Some(d) = self.diag.get_mut(e) {
+                put(d, b, 4, 4);
             }
         } else {
-            return false;
-        };
-        for (row, src) in dst.iter_mut().zip(b.iter()) {
-            for (d, s) in row.iter_mut().zip(src.iter()) {
-                *d += *s;
-            }
+            put(&mut self.tail[..4], b, 4, 4);
         }
         true
     }
 
-    /// Largest absolute value stored (for tests and the growth check).
+    /// Dense copy of the values.
     pub fn to_dense(&self) -> nalgebra::DMatrix<f64> {
         let n = self.n();
         nalgebra::DMatrix::from_fn(n, n, |i, j| self.get(i, j))
@@ -464,6 +464,11 @@ impl<const S: usize> DenseLu<S> {
         }
     }
 
+    /// Sets the size to `n` (the entries must be written again before [`DenseLu::factor`]).
+    pub fn resize(&mut self, n: usize) {
+        self.n = n;
+    }
+
     /// Factors `a` in place; false if a pivot is zero or not finite (or `n` is too large).
     pub fn factor(&mut self) -> bool {
         if self.n > S || self.n > 10 {
@@ -507,7 +512,8 @@ impl<const S: usize> DenseLu<S> {
             let r = 1.0 / a[k][k];
             let pivot_row = a[k];
             for i in 0..N {
-                if i > k {
+                // (The constraint Jacobians are sparse: most multipliers are zero.)
+                if i > k && a[i][k] != 0.0 {
                     let l = a[i][k] * r;
                     a[i][k] = l;
                     for c in 0..N {
@@ -636,11 +642,11 @@ impl Matrix {
         self.block.add(i, j, v)
     }
 
-    /// Adds a 4 × 4 block at node rows `k`, columns `l` ([`BlockLu::add_block`]).
+    /// Adds an element's 8 × 8 block ([`BlockLu::add_element`]).
     #[inline]
-    pub fn add_block(&mut self, k: usize, l: usize, b: &Block) -> bool {
+    pub fn add_element(&mut self, e: usize, b: &[[f64; 8]; 8]) -> bool {
         self.factored = None;
-        self.block.add_block(k, l, b)
+        self.block.add_element(e, b)
     }
 
     /// Dense copy of the values.

@@ -148,6 +148,18 @@ struct Kin {
     bd: [[f64; NI]; MC],
 }
 
+impl Kin {
+    fn new(m: usize) -> Self {
+        Self {
+            w: [0.0; NW],
+            wd: [0.0; NW],
+            cons: Cons::ZERO,
+            lu_dep: DenseLu::new(m),
+            bd: [[0.0; NI]; MC],
+        }
+    }
+}
+
 struct Evaluated {
     r: Vec<f64>,
     kin: Kin,
@@ -245,17 +257,6 @@ impl Clone for FullSolver {
 /// it factors).
 fn lock(w: &Mutex<Work>) -> MutexGuard<'_, Work> {
     w.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// The 4 × 4 block of `b` from row `r`, column `c`.
-fn quarter(b: &[[f64; 8]; 8], r: usize, c: usize) -> [[f64; 4]; 4] {
-    let mut q = [[0.0; 4]; 4];
-    for (dst, src) in q.iter_mut().zip(b.iter().skip(r)) {
-        for (d, s) in dst.iter_mut().zip(src.iter().skip(c)) {
-            *d = *s;
-        }
-    }
-    q
 }
 
 /// `M₄` if `m = M₄ ⊗ I₂` exactly (the ANCF cable's mass and bending matrices are).
@@ -784,11 +785,37 @@ impl FullSolver {
         theta_ref: f64,
         chord: Option<&DenseLu<MC>>,
     ) -> Result<Kin, Error> {
+        let mut kin = Kin::new(mode.m());
+        self.local_kin_into(mode, qi, vi, warm, theta_ref, chord, &mut kin)?;
+        Ok(kin)
+    }
+
+    /// [`FullSolver::local_kin_with`] written into `out` (no copy of the result).
+    #[allow(clippy::too_many_arguments)]
+    fn local_kin_into(
+        &self,
+        mode: Mode,
+        qi: &[f64],
+        vi: &[f64],
+        warm: &[f64; NW],
+        theta_ref: f64,
+        chord: Option<&DenseLu<MC>>,
+        out: &mut Kin,
+    ) -> Result<(), Error> {
         let ind = mode.independent();
         let dep = mode.dependent();
         let m = mode.m();
-        let mut w = *warm;
-        let mut wd = [0.0; NW];
+        let Kin {
+            w,
+            wd,
+            cons: c0,
+            lu_dep,
+            bd,
+        } = out;
+        *w = *warm;
+        *wd = [0.0; NW];
+        *bd = [[0.0; NI]; MC];
+        lu_dep.resize(m);
         for (k, &j) in ind.iter().enumerate() {
             w[j] = qi.get(k).copied().unwrap_or(0.0);
             wd[j] = vi.get(k).copied().unwrap_or(0.0);
@@ -807,11 +834,9 @@ impl FullSolver {
         let mut converged = m == 0;
         let mut last: f64 = 0.0;
         let mut iterations = 0;
-        let mut c0 = Cons::ZERO;
-        let mut lu_dep = DenseLu::<MC>::new(m);
         loop {
-            self.bodies.values_into(&w, mode, theta_ref, &mut c0);
-            if (converged || chord.is_none()) && !build(&c0, &mut lu_dep) {
+            self.bodies.values_into(w, mode, theta_ref, c0);
+            if (converged || chord.is_none()) && !build(c0, lu_dep) {
                 return Err(Error::Singular);
             }
             if converged {
@@ -828,7 +853,7 @@ impl FullSolver {
             for (d, v) in dx.iter_mut().zip(c0.val.iter()).take(m) {
                 *d = -v;
             }
-            chord.unwrap_or(&lu_dep).solve(&mut dx);
+            chord.unwrap_or(lu_dep).solve(&mut dx);
             if !dx.iter().all(|v| v.is_finite()) {
                 return Err(Error::Singular);
             }
@@ -844,7 +869,6 @@ impl FullSolver {
             last = inc;
             iterations += 1;
         }
-        let mut bd = [[0.0; NI]; MC];
         if m > 0 {
             let mut rhs = [0.0; MC];
             for (x, grad) in rhs.iter_mut().zip(c0.grad.iter()).take(m) {
@@ -872,14 +896,8 @@ impl FullSolver {
             }
         }
         // The constraints with the velocities: values and gradients are those at rest.
-        c0.quad = self.bodies.quad(&w, &wd, mode);
-        Ok(Kin {
-            w,
-            wd,
-            cons: c0,
-            lu_dep,
-            bd,
-        })
+        c0.quad = self.bodies.quad(w, wd, mode);
+        Ok(())
     }
 
     /// Dependent local accelerations from the acceleration constraints `C_q q̈ = Q_d`.
@@ -938,56 +956,32 @@ impl FullSolver {
         Ok(r)
     }
 
-    /// Residual (and, with `jac`, the Newton matrix `∂r/∂x` for the chain, assembled into the
-    /// given matrix, not factored) at independent positions, velocities and accelerations.
-    /// `warm` carries the dependent positions between calls. The residual does not depend on
-    /// whether the matrix is assembled (bit for bit).
-    #[allow(clippy::too_many_arguments)]
-    fn evaluate(
+    /// The beam's part of the right-hand side of (22) on the free coordinates (element forces
+    /// and weights, into `f`), and with `jac` the elements' Newton blocks added into the matrix.
+    #[inline(never)]
+    fn element_forces(
         &self,
-        mass: &mut MassFactor,
-        jac: Option<(&mut Matrix, &Chain<f64>)>,
+        f: &mut [f64],
+        mut jac: Option<(&mut Matrix, &Chain<f64>)>,
         qi: &[f64],
         vi: &[f64],
-        ai: &[f64],
         g_eff: f64,
-        mode: Mode,
-        warm: &mut [f64; NW],
-        theta_ref: f64,
-    ) -> Result<Evaluated, Error> {
+    ) {
         let n = self.n;
-        let nz = self.nz;
-        let ni = self.n_ind(mode);
-        let loc0 = 4 * n - 4;
-        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], warm, theta_ref)?;
-        *warm = kin.w;
-        let m = mode.m();
-        let mut jac = jac;
-        if let Some((jb, _)) = jac.as_mut() {
-            if jb.n() != ni {
-                return Err(Error::Singular);
-            }
-            jb.clear();
-        }
-        // Right-hand side of (22) on the free coordinates (index z − 4): element forces and
-        // weights; the root node's rows only feed the clamp multipliers, which are not needed.
-        let nf = nz - 4;
-        let f = &mut mass.f;
-        f.fill(0.0);
         let weight = self.element.gravity_force(g_eff);
         let damp = self.params.damping.stiffness_proportional;
-        let (tip_force, line) = match &self.loads {
-            Some((p, w)) => (*p, Some(w)),
-            None => (0.0, None),
-        };
-        let zval = |i: usize, x: &[f64]| if i < 4 { 0.0 } else { x[i - 4] };
+        let line = self.loads.as_ref().map(|(_, w)| w);
         for e in 0..n {
-            let mut u = ElementVector::<f64>::zeros();
-            let mut ud = ElementVector::<f64>::zeros();
-            for i in 0..8 {
-                u[i] = zval(4 * e + i, qi);
-                ud[i] = zval(4 * e + i, vi);
-            }
+            // Element e's coordinates: z indices 4e..4e+8, free index z − 4 (root node zero).
+            let (lo, skip) = if e == 0 { (0, 4) } else { (4 * e - 4, 0) };
+            let gather = |x: &[f64]| {
+                let mut u = [0.0; 8];
+                for (d, s) in u.iter_mut().skip(skip).zip(x.iter().skip(lo)) {
+                    *d = *s;
+                }
+                ElementVector::<f64>::from(u)
+            };
+            let (u, ud) = (gather(qi), gather(vi));
             let (element, me, kb) = self.element_of(e);
             let ec = self.element_const(e);
             // Axial force, and with the matrix the element's Newton block
@@ -1024,12 +1018,7 @@ impl FullSolver {
                         }
                     };
                     // Element e couples free nodes e − 1 and e (the root node is clamped).
-                    if e > 0 {
-                        jb.add_block(e - 1, e - 1, &quarter(&block, 0, 0));
-                        jb.add_block(e - 1, e, &quarter(&block, 0, 4));
-                        jb.add_block(e, e - 1, &quarter(&block, 4, 0));
-                    }
-                    jb.add_block(e, e, &quarter(&block, 4, 4));
+                    jb.add_element(e, &block);
                     ql
                 }
             };
@@ -1040,13 +1029,76 @@ impl FullSolver {
             if let Some(w) = line {
                 applied += element.line_load_force(w[e]);
             }
-            let fe = applied - kb * (u + ud * damp) - ql;
-            for i in 0..8 {
-                if let Some(fi) = (4 * e + i).checked_sub(4) {
-                    f[fi] += fe[i];
+            let uc = u + ud * damp;
+            let kbu = match &ec.kron {
+                // K_t (u + c u̇) without the zero entries of K₄ ⊗ I₂ (the same sums).
+                Some((_, k4)) => {
+                    let ucs: [f64; 8] = uc.into();
+                    let mut r = [0.0; 8];
+                    for (rp, kr) in r.chunks_exact_mut(2).zip(k4.iter()) {
+                        for (d, rd) in rp.iter_mut().enumerate() {
+                            let mut acc = 0.0;
+                            for (k, uq) in kr.iter().zip(ucs.chunks_exact(2)) {
+                                acc += k * uq[d];
+                            }
+                            *rd = acc;
+                        }
+                    }
+                    ElementVector::<f64>::from(r)
                 }
+                None => kb * uc,
+            };
+            let fe = applied - kbu - ql;
+            for (fi, x) in f.iter_mut().skip(lo).zip(fe.iter().skip(skip)) {
+                *fi += x;
             }
         }
+    }
+
+    /// Residual (and, with `jac`, the Newton matrix `∂r/∂x` for the chain, assembled into the
+    /// given matrix, not factored) at independent positions, velocities and accelerations.
+    /// `warm` carries the dependent positions between calls. The residual does not depend on
+    /// whether the matrix is assembled (bit for bit).
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate(
+        &self,
+        mass: &mut MassFactor,
+        jac: Option<(&mut Matrix, &Chain<f64>)>,
+        qi: &[f64],
+        vi: &[f64],
+        ai: &[f64],
+        g_eff: f64,
+        mode: Mode,
+        warm: &mut [f64; NW],
+        theta_ref: f64,
+    ) -> Result<Evaluated, Error> {
+        let n = self.n;
+        let nz = self.nz;
+        let ni = self.n_ind(mode);
+        let loc0 = 4 * n - 4;
+        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], warm, theta_ref)?;
+        *warm = kin.w;
+        let m = mode.m();
+        let mut jac = jac;
+        if let Some((jb, _)) = jac.as_mut() {
+            if jb.n() != ni {
+                return Err(Error::Singular);
+            }
+            jb.clear();
+        }
+        // Right-hand side of (22) on the free coordinates (index z − 4): element forces and
+        // weights; the root node's rows only feed the clamp multipliers, which are not needed.
+        let nf = nz - 4;
+        let f = &mut mass.f;
+        f.fill(0.0);
+        let tip_force = self.loads.as_ref().map_or(0.0, |(p, _)| *p);
+        self.element_forces(
+            f,
+            jac.as_mut().map(|(jb, c)| (&mut **jb, *c)),
+            qi,
+            vi,
+            g_eff,
+        );
         let b0 = self.b0();
         let (mt, mb) = self.bodies.weights;
         if tip_force != 0.0 {
@@ -1173,6 +1225,7 @@ impl FullSolver {
                     let s = if k < 2 { self.params.beam.length } else { 1.0 };
                     let eps = 1e-6 * s / denom;
                     let mut cols = [[0.0; NI]; 2];
+                    let mut kp = Kin::new(m);
                     for (side, sign) in [(0usize, 1.0f64), (1, -1.0)] {
                         let (mut q, mut v, mut a) = ([0.0; NI], [0.0; NI], [0.0; NI]);
                         for (dst, src) in [(&mut q, qi), (&mut v, vi), (&mut a, ai)] {
@@ -1190,13 +1243,14 @@ impl FullSolver {
                         for (row, &j) in mode.dependent().iter().enumerate() {
                             pred[j] += kin.bd[row][k] * dq;
                         }
-                        let kp = self.local_kin_with(
+                        self.local_kin_into(
                             mode,
                             &q[..nl],
                             &v[..nl],
                             &pred,
                             theta_ref,
                             Some(&kin.lu_dep),
+                            &mut kp,
                         )?;
                         cols[side] = self.local_residual(&kp, mode, &a[..nl], g_eff)?;
                     }
@@ -2185,7 +2239,10 @@ impl Simulator for FullSolver {
         };
         for k in 0..self.n {
             let u = ElementVector::<f64>::from_fn(|i, _| s.q[4 * k + i]);
-            e.beam_strain += self.element.axial_energy(&u) + self.element.bending_energy(&u);
+            // (`bending_energy_with` the kept K_t: the same value as `bending_energy`, bit
+            // for bit, without rebuilding K_t per element and row.)
+            e.beam_strain +=
+                self.element.axial_energy(&u) + Element::bending_energy_with(&self.kb, &u);
             let mut v = ElementVector::<f64>::from_fn(|i, _| s.v[4 * k + i]);
             v[1] += base_velocity;
             v[5] += base_velocity;
