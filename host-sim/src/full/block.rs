@@ -269,8 +269,10 @@ impl BlockLu {
             for (gr, lr) in g.iter_mut().zip(l.iter()) {
                 for c in 0..4 {
                     let mut x = lr[c];
-                    for k in 0..c {
-                        x -= gr[k] * s[k][c];
+                    for k in 0..4 {
+                        if k < c {
+                            x -= gr[k] * s[k][c];
+                        }
                     }
                     gr[c] = x * iv[c];
                 }
@@ -281,9 +283,11 @@ impl BlockLu {
             // H = L̃⁻¹ P U (column by column).
             for c in 0..4 {
                 let mut col = [u[piv[0]][c], u[piv[1]][c], u[piv[2]][c], u[piv[3]][c]];
-                for i in 1..4 {
-                    for k in 0..i {
-                        col[i] -= s[i][k] * col[k];
+                for i in 0..4 {
+                    for k in 0..4 {
+                        if k < i {
+                            col[i] -= s[i][k] * col[k];
+                        }
                     }
                 }
                 for (hr, x) in h.iter_mut().zip(col.iter()) {
@@ -335,9 +339,11 @@ impl BlockLu {
                 *zi = *bi - (gr[0] * prev[0] + gr[1] * prev[1] + gr[2] * prev[2] + gr[3] * prev[3]);
             }
             let mut y = [z[perm[0]], z[perm[1]], z[perm[2]], z[perm[3]]];
-            for i in 1..4 {
-                for k in 0..i {
-                    y[i] -= lu[i][k] * y[k];
+            for i in 0..4 {
+                for k in 0..4 {
+                    if k < i {
+                        y[i] -= lu[i][k] * y[k];
+                    }
                 }
             }
             bk.copy_from_slice(&y);
@@ -371,9 +377,12 @@ impl BlockLu {
             for (xi, (yi, hr)) in x.iter_mut().zip(bk.iter().zip(h.iter())) {
                 *xi = *yi - (hr[0] * next[0] + hr[1] * next[1] + hr[2] * next[2] + hr[3] * next[3]);
             }
-            for i in (0..4).rev() {
-                for k in i + 1..4 {
-                    x[i] -= lu[i][k] * x[k];
+            for ii in 0..4 {
+                let i = 3 - ii;
+                for k in 0..4 {
+                    if k > i {
+                        x[i] -= lu[i][k] * x[k];
+                    }
                 }
                 x[i] *= inv[i];
             }
@@ -395,9 +404,9 @@ fn lu4(a: &mut Block) -> Option<([usize; 4], [f64; 4])> {
     for k in 0..4 {
         let mut p = k;
         let mut big = a[k][k].abs();
-        for i in k + 1..4 {
+        for i in 0..4 {
             let v = a[i][k].abs();
-            if v > big {
+            if i > k && v > big {
                 big = v;
                 p = i;
             }
@@ -412,11 +421,15 @@ fn lu4(a: &mut Block) -> Option<([usize; 4], [f64; 4])> {
         let r = 1.0 / a[k][k];
         inv[k] = r;
         let pivot_row = a[k];
-        for row in a.iter_mut().skip(k + 1) {
-            let l = row[k] * r;
-            row[k] = l;
-            for c in k + 1..4 {
-                row[c] -= l * pivot_row[c];
+        for (i, row) in a.iter_mut().enumerate() {
+            if i > k {
+                let l = row[k] * r;
+                row[k] = l;
+                for c in 0..4 {
+                    if c > k {
+                        row[c] -= l * pivot_row[c];
+                    }
+                }
             }
         }
     }

@@ -1072,6 +1072,25 @@ impl FullSolver {
         warm: &mut [f64; NW],
         theta_ref: f64,
     ) -> Result<Evaluated, Error> {
+        self.evaluate_with(mass, jac, qi, vi, ai, g_eff, mode, warm, theta_ref, true)
+    }
+
+    /// [`FullSolver::evaluate`]; without `residual` only the local kinematics and the
+    /// multipliers (`r` empty: [`FullSolver::multipliers`]).
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate_with(
+        &self,
+        mass: &mut MassFactor,
+        jac: Option<(&mut Matrix, &Chain<f64>)>,
+        qi: &[f64],
+        vi: &[f64],
+        ai: &[f64],
+        g_eff: f64,
+        mode: Mode,
+        warm: &mut [f64; NW],
+        theta_ref: f64,
+        residual: bool,
+    ) -> Result<Evaluated, Error> {
         let n = self.n;
         let nz = self.nz;
         let ni = self.n_ind(mode);
@@ -1145,6 +1164,13 @@ impl FullSolver {
             for (k, l) in lambda_local.iter_mut().enumerate().take(m) {
                 *l = lam[k];
             }
+        }
+        if !residual {
+            return Ok(Evaluated {
+                r: Vec::new(),
+                kin,
+                lambda_local,
+            });
         }
         // z̈ (root node clamped at rest).
         let zdd = |z: usize| if z < 4 { 0.0 } else { f[z - 4] };
@@ -1765,7 +1791,7 @@ impl FullSolver {
         let vi = self.gather_ind(&s.v, mode);
         let ai = self.gather_ind(&s.a, mode);
         let mut warm = self.local_of(&s.q);
-        let ev = self.evaluate(
+        let ev = self.evaluate_with(
             &mut lock(&self.work).mass,
             None,
             &qi,
@@ -1775,6 +1801,7 @@ impl FullSolver {
             mode,
             &mut warm,
             s.theta_ref,
+            false,
         )?;
         Ok(ev.lambda_local)
     }
