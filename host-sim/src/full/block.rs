@@ -548,6 +548,47 @@ impl<const S: usize> DenseLu<S> {
         by_size!(self, self.n, solve_n(z))
     }
 
+    /// Solves `Aᵀ x = b` in place (the leading `n` entries of `z`) with the factors of `A`.
+    pub fn solve_transposed(&self, z: &mut [f64; S]) {
+        if self.n > S || self.n > 10 {
+            return;
+        }
+        by_size!(self, self.n, solve_transposed_n(z))
+    }
+
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
+    fn solve_transposed_n<const N: usize>(&self, z: &mut [f64; S]) {
+        if N > S {
+            return;
+        }
+        // P A = L U, so Aᵀ = Uᵀ Lᵀ P: Uᵀ y = b, Lᵀ w = y, x = Pᵀ w.
+        let a = &self.a;
+        let mut y = [0.0; S];
+        for i in 0..N {
+            let mut x = z[i];
+            for k in 0..N {
+                if k < i {
+                    x -= a[k][i] * y[k];
+                }
+            }
+            y[i] = x / a[i][i];
+        }
+        for ii in 0..N {
+            let i = N - 1 - ii;
+            let mut x = y[i];
+            for k in 0..N {
+                if k > i {
+                    x -= a[k][i] * y[k];
+                }
+            }
+            y[i] = x;
+        }
+        for i in 0..N {
+            z[self.perm[i]] = y[i];
+        }
+    }
+
     #[inline(always)]
     #[allow(clippy::needless_range_loop)]
     fn solve_n<const N: usize>(&self, z: &mut [f64; S]) {
@@ -793,6 +834,45 @@ mod tests {
                         xd[i]
                     );
                 }
+            }
+        }
+    }
+
+    /// The small dense LU solves `A x = b` and `Aᵀ x = b` (with row exchanges).
+    #[test]
+    fn dense_lu_solves_and_solves_transposed() {
+        let n = 5;
+        let mut lu = DenseLu::<6>::new(n);
+        for i in 0..n {
+            for j in 0..n {
+                lu.a[i][j] = if i == j && i == 0 {
+                    0.0
+                } else {
+                    ((i * 5 + j * 3) as f64).sin() + if i == j { 2.0 } else { 0.0 }
+                };
+            }
+        }
+        let dense = nalgebra::DMatrix::from_fn(n, n, |i, j| lu.a[i][j]);
+        assert!(lu.factor());
+        let x: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        for (m, solve) in [
+            (
+                dense.clone(),
+                DenseLu::<6>::solve as fn(&DenseLu<6>, &mut [f64; 6]),
+            ),
+            (dense.transpose(), DenseLu::<6>::solve_transposed),
+        ] {
+            let b = &m * nalgebra::DVector::from_column_slice(&x);
+            let mut z = [0.0; 6];
+            z[..n].copy_from_slice(b.as_slice());
+            solve(&lu, &mut z);
+            for i in 0..n {
+                assert!(
+                    (z[i] - x[i]).abs() <= 1e-12 * 5.0,
+                    "{i}: {} vs {}",
+                    z[i],
+                    x[i]
+                );
             }
         }
     }

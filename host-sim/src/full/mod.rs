@@ -802,6 +802,9 @@ impl FullSolver {
         chord: Option<&DenseLu<MC>>,
         out: &mut Kin,
     ) -> Result<(), Error> {
+        // (The finite differences of the Newton matrix pass a chord and need no B_d:
+        // `local_residual` uses C_d⁻ᵀ.)
+        let with_bd = chord.is_none();
         let ind = mode.independent();
         let dep = mode.dependent();
         let m = mode.m();
@@ -881,7 +884,7 @@ impl FullSolver {
             for (x, &j) in rhs.iter().zip(dep.iter()) {
                 wd[j] = *x;
             }
-            for (k, &jk) in ind.iter().enumerate() {
+            for (k, &jk) in ind.iter().enumerate().filter(|_| with_bd) {
                 let mut col = [0.0; MC];
                 for (x, grad) in col.iter_mut().zip(c0.grad.iter()).take(m) {
                     *x = -grad[jk];
@@ -943,14 +946,29 @@ impl FullSolver {
         }
         gw[RT2] += mt * g_eff;
         gw[RB2] += mb * g_eff;
+        // r = gw_i + B_dᵀ gw_d with B_dᵀ gw_d = −C_iᵀ (C_d⁻ᵀ gw_d): one transposed solve
+        // instead of B_d's columns (not built for these local kinematics).
+        let m = mode.m();
+        let mut t = [0.0; MC];
+        for (x, &j) in t.iter_mut().zip(mode.dependent().iter()) {
+            *x = gw[j];
+        }
+        if m > 0 {
+            kin.lu_dep.solve_transposed(&mut t);
+            if !t.iter().all(|v| v.is_finite()) {
+                return Err(Error::Singular);
+            }
+        }
         let mut r = [0.0; NI];
-        for (k, &jk) in mode.independent().iter().enumerate() {
-            r[k] = gw[jk]
-                + mode
-                    .dependent()
+        for (rk, &jk) in r.iter_mut().zip(mode.independent().iter()) {
+            *rk = gw[jk]
+                - kin
+                    .cons
+                    .grad
                     .iter()
-                    .enumerate()
-                    .map(|(row, &j)| kin.bd[row][k] * gw[j])
+                    .zip(t.iter())
+                    .take(m)
+                    .map(|(g, x)| g[jk] * x)
                     .sum::<f64>();
         }
         Ok(r)
