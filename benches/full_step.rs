@@ -1,12 +1,14 @@
 //! Host time of one step of the full solver (maximal coordinates, `f64`) against the number of
 //! elements, N = 8 … 512: it should grow about linearly in N (constant mass matrix factored
-//! once, sparse LU of the banded reduced Newton matrix once per step). Locked ball (no stop
-//! events), paper integrator (h = 3 ms), 0.5 mm at 3.70 Hz, after 1 s of warm-up. The cost
-//! slope is `log(t_512 / t_8) / log(64)` (docs/full-solver.md).
+//! once, block LU of the block-tridiagonal reduced Newton matrix once per step). Locked ball
+//! (no stop events), paper integrator (h = 3 ms), 0.5 mm at 3.70 Hz, after 1 s of warm-up. The
+//! cost slope is `log(t_512 / t_8) / log(64)` (docs/full-solver.md). The group
+//! `full_step/locked-sparse-lu` times the same step with the kept sparse LU (faer), the
+//! reference the block LU replaced (issue 17), at N = 16 and 64.
 
 use absorber_core::Params;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use host_sim::full::{FullSolver, SceneKind};
+use host_sim::full::{FullSolver, Linear, SceneKind};
 use std::hint::black_box;
 
 fn accel(k: u64) -> f64 {
@@ -15,10 +17,21 @@ fn accel(k: u64) -> f64 {
 }
 
 fn full_step(c: &mut Criterion) {
-    let mut g = c.benchmark_group("full_step/locked");
-    for n in [8usize, 16, 32, 64, 128, 256, 512] {
+    run(
+        c,
+        "full_step/locked",
+        Linear::Block,
+        &[8, 16, 32, 64, 128, 256, 512],
+    );
+    run(c, "full_step/locked-sparse-lu", Linear::Sparse, &[16, 64]);
+}
+
+fn run(c: &mut Criterion, group: &str, linear: Linear, sizes: &[usize]) {
+    let mut g = c.benchmark_group(group);
+    for &n in sizes {
         let mut s = FullSolver::at_rest(Params::default(), SceneKind::LockedBall, n, 0.0)
             .expect("paper scene");
+        s.set_linear(linear).expect("factorization");
         let mut k = 0u64;
         while (k as f64) * 0.003 < 1.0 {
             k += 1;

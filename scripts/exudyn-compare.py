@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Paired, interleaved timing of the full solver against Exudyn on the paper's scene.
 
-Usage: scripts/exudyn-compare.sh [--elements 16] [--duration 20] [--repeats 5]
+Usage: scripts/exudyn-compare.sh [--elements 16] [--duration 20] [--repeats 5] [--every 1]
 (the shell wrapper makes a venv with `pip install exudyn numpy` and builds host-sim).
 
 Both sides simulate the same scene from its static equilibrium with the same integrator
@@ -21,7 +21,8 @@ Exudyn moves the clamp (absolute coordinates, prescribed base y_b(t) through an 
 function, initial velocity of the base everywhere); ours works in the frame of the base
 (effective gravity g + y_b''). Timed: whole model build, static solve and dynamic run for
 Exudyn (in-process, after `import exudyn`); the whole host-sim process (build, static solve,
-run, CSV written) for ours. Prints the medians and the ratio exudyn / ours per scene.
+run, CSV written: every step by default, every n-th with --every; Exudyn writes no solution
+file) for ours. Prints the medians and the ratio exudyn / ours per scene.
 """
 
 import argparse
@@ -176,12 +177,12 @@ def exudyn_static(n, solver):
     return exudyn_run("static", n, 1.0, 0.0, solver)
 
 
-def ours_run(binary, kind, n, freq, duration):
+def ours_run(binary, kind, n, freq, duration, every=1):
     with tempfile.TemporaryDirectory() as out:
         cmd = [
             binary, "run", "--solver", "full", "--kind", kind, "--elements", str(n),
             "--frequency", str(freq), "--duration", str(duration), "--no-plots", "-o", out,
-            "--json",
+            "--json", "--every", str(every),
         ]
         t0 = time.perf_counter()
         res = subprocess.run(cmd, check=True, capture_output=True, text=True)
@@ -198,12 +199,15 @@ def main():
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--solver", choices=["dense", "sparse"], default="sparse",
                     help="Exudyn linear solver (sparse: the faster of the two at N = 16)")
+    ap.add_argument("--every", type=int, default=1,
+                    help="ours: write every n-th step to the CSV (default 1, every step; Exudyn "
+                    "writes no solution file, so a large value compares the solvers alone)")
     args = ap.parse_args()
     import exudyn as exu
 
     solver = exu.LinearSolverType.EXUdense if args.solver == "dense" else exu.LinearSolverType.EigenSparse
     print(f"exudyn {exu.__version__}, N = {args.elements}, {args.duration} s simulated, "
-          f"{args.repeats} paired runs, Exudyn solver {args.solver}")
+          f"{args.repeats} paired runs, Exudyn solver {args.solver}, ours CSV every {args.every}")
     cases = [("free", 3.70), ("locked", 4.13)]
     for kind, f in cases:
         sq = exudyn_static(args.elements, solver) if kind == "free" else None
@@ -211,11 +215,11 @@ def main():
         for _ in range(args.repeats):
             # Alternate the order in each pair.
             if len(ex) % 2 == 0:
-                a = ours_run(args.binary, kind, args.elements, f, args.duration)
+                a = ours_run(args.binary, kind, args.elements, f, args.duration, args.every)
                 b, _ = exudyn_run(kind, args.elements, f, args.duration, solver, sq)
             else:
                 b, _ = exudyn_run(kind, args.elements, f, args.duration, solver, sq)
-                a = ours_run(args.binary, kind, args.elements, f, args.duration)
+                a = ours_run(args.binary, kind, args.elements, f, args.duration, args.every)
             us.append(a)
             ex.append(b)
             ratios.append(b / a)

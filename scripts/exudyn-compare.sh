@@ -2,7 +2,7 @@
 # Paired, interleaved timing of the full solver against Exudyn (see exudyn-compare.py).
 # Installs Exudyn from PyPI into a venv (default $TMPDIR/absorber-exudyn-venv, outside the repository), builds host-sim (release) and
 # runs the comparison; extra arguments go to the Python script (--elements, --duration,
-# --repeats, --solver).
+# --repeats, --solver, --every).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv="${EXUDYN_VENV:-${TMPDIR:-/tmp}/absorber-exudyn-venv}"

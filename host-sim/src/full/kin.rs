@@ -120,6 +120,15 @@ pub struct Cons {
     pub quad: [f64; MC],
 }
 
+impl Cons {
+    /// No constraint.
+    pub const ZERO: Self = Self {
+        val: [0.0; MC],
+        grad: [[0.0; NW]; MC],
+        quad: [0.0; MC],
+    };
+}
+
 /// `ẇᵀ ∇² atan2(Y, X) ẇ` for the direction vector (X, Y) and its rate.
 fn atan2_quad(x: f64, y: f64, xd: f64, yd: f64) -> f64 {
     let r2 = x * x + y * y;
@@ -141,28 +150,36 @@ impl Bodies {
 
     /// The active constraints at `w` with velocities `wd`.
     pub fn constraints(&self, w: &[f64; NW], wd: &[f64; NW], mode: Mode, theta_ref: f64) -> Cons {
-        let mut c = Cons {
-            val: [0.0; MC],
-            grad: [[0.0; NW]; MC],
-            quad: [0.0; MC],
-        };
+        let mut c = self.values(w, mode, theta_ref);
+        c.quad = self.quad(w, wd, mode);
+        c
+    }
+
+    /// Values and gradients of the active constraints at `w` (quadratic terms zero: those of
+    /// [`Bodies::constraints`] at rest).
+    pub fn values(&self, w: &[f64; NW], mode: Mode, theta_ref: f64) -> Cons {
+        let mut c = Cons::ZERO;
+        self.values_into(w, mode, theta_ref, &mut c);
+        c
+    }
+
+    /// [`Bodies::values`] written into `c` (every entry).
+    pub fn values_into(&self, w: &[f64; NW], mode: Mode, theta_ref: f64, c: &mut Cons) {
+        *c = Cons::ZERO;
         if mode == Mode::Beam {
-            return c;
+            return;
         }
         let d = self.offset;
         let (s, co) = w[PSI].sin_cos();
-        let psid = wd[PSI];
         // c1, c2: fixed joint position.
         c.val[0] = self.length + w[0] - w[RT1] + d * s;
         c.grad[0][0] = 1.0;
         c.grad[0][RT1] = -1.0;
         c.grad[0][PSI] = d * co;
-        c.quad[0] = -d * s * psid * psid;
         c.val[1] = w[1] - w[RT2] - d * co;
         c.grad[1][1] = 1.0;
         c.grad[1][RT2] = -1.0;
         c.grad[1][PSI] = d * s;
-        c.quad[1] = d * co * psid * psid;
         // c3: ψ − atan2(a4, 1 + a3).
         let (x, y) = (1.0 + w[2], w[3]);
         let r2 = x * x + y * y;
@@ -170,13 +187,11 @@ impl Bodies {
         c.grad[2][PSI] = 1.0;
         c.grad[2][2] = y / r2;
         c.grad[2][3] = -x / r2;
-        c.quad[2] = -atan2_quad(x, y, wd[2], wd[3]);
         if matches!(mode, Mode::Tip | Mode::Flying) {
-            return c;
+            return;
         }
         // Ball: D = R_b − r_A.
         let (dx, dy) = self.ball_offset(w);
-        let (dxd, dyd) = (wd[RB1] - wd[0], wd[RB2] - wd[1]);
         let dist2 = dx * dx + dy * dy;
         let dist = dist2.sqrt();
         let (nx, ny) = (dx / dist, dy / dist);
@@ -185,12 +200,9 @@ impl Bodies {
         c.grad[3][RB2] = ny;
         c.grad[3][0] = -nx;
         c.grad[3][1] = -ny;
-        let ndot = nx * dxd + ny * dyd;
-        c.quad[3] = (dxd * dxd + dyd * dyd - ndot * ndot) / dist;
         // θ = atan2(Y, X) with X = −D_y, Y = D_x.
         let theta = theta_of(dx, dy, theta_ref);
         let (tx, ty) = (-dy / dist2, dx / dist2); // ∂θ/∂D
-        let tq = atan2_quad(-dy, dx, -dyd, dxd);
         c.val[4] = self.rb * w[PHI] - self.rtr * w[PSI] + self.rho * theta;
         c.grad[4][PHI] = self.rb;
         c.grad[4][PSI] = -self.rtr;
@@ -198,7 +210,6 @@ impl Bodies {
         c.grad[4][RB2] = self.rho * ty;
         c.grad[4][0] = -self.rho * tx;
         c.grad[4][1] = -self.rho * ty;
-        c.quad[4] = self.rho * tq;
         let held = match mode {
             Mode::Held(lock) => Some((lock, 1.0)),
             Mode::Plumb => Some((0.0, 0.0)),
@@ -212,9 +223,38 @@ impl Bodies {
             c.grad[5][RB2] = ty;
             c.grad[5][0] = -tx;
             c.grad[5][1] = -ty;
-            c.quad[5] = tq;
         }
-        c
+    }
+
+    /// The quadratic velocity terms `ẇᵀ (∂²c/∂w²) ẇ` of the active constraints.
+    pub fn quad(&self, w: &[f64; NW], wd: &[f64; NW], mode: Mode) -> [f64; MC] {
+        let mut q = [0.0; MC];
+        if mode == Mode::Beam {
+            return q;
+        }
+        let d = self.offset;
+        let (s, co) = w[PSI].sin_cos();
+        let psid = wd[PSI];
+        q[0] = -d * s * psid * psid;
+        q[1] = d * co * psid * psid;
+        let (x, y) = (1.0 + w[2], w[3]);
+        q[2] = -atan2_quad(x, y, wd[2], wd[3]);
+        if matches!(mode, Mode::Tip | Mode::Flying) {
+            return q;
+        }
+        let (dx, dy) = self.ball_offset(w);
+        let (dxd, dyd) = (wd[RB1] - wd[0], wd[RB2] - wd[1]);
+        let dist2 = dx * dx + dy * dy;
+        let dist = dist2.sqrt();
+        let (nx, ny) = (dx / dist, dy / dist);
+        let ndot = nx * dxd + ny * dyd;
+        q[3] = (dxd * dxd + dyd * dyd - ndot * ndot) / dist;
+        let tq = atan2_quad(-dy, dx, -dyd, dxd);
+        q[4] = self.rho * tq;
+        if matches!(mode, Mode::Held(_) | Mode::Plumb) {
+            q[5] = tq;
+        }
+        q
     }
 
     /// Relative ball angle α = θ − ψ, its gradient over `w` and its rate.

@@ -176,11 +176,6 @@ impl Lu {
         }
     }
 
-    /// Dimension.
-    pub fn n(&self) -> usize {
-        self.pattern.n
-    }
-
     /// Sets every value to zero (the factors become stale).
     pub fn clear(&mut self) {
         self.values.fill(0.0);
@@ -200,7 +195,8 @@ impl Lu {
         }
     }
 
-    /// Dense copy of the assembled values (eigenvalues, tests).
+    /// Dense copy of the assembled values (tests).
+    #[cfg(test)]
     pub fn to_dense(&self) -> nalgebra::DMatrix<f64> {
         let p = &self.pattern;
         let mut d = nalgebra::DMatrix::zeros(p.n, p.n);
