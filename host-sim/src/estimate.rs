@@ -1179,17 +1179,19 @@ mod twin_tests {
     /// vortex-shedding episode): the estimate from the noisy, biased tip accelerometer meets
     /// the targets against the full-solver truth — dynamic root-stress RMS error
     /// ≤ 10 % of the true RMS, Miner damage ratio in 0.8–1.25 — with no failed sample.
-    /// The lab study's physics: off the absorber's tuning (3.70 Hz) the ball hardly moves and a
-    /// model with it locked predicts the root stress within 2 % of the free-ball truth (a small
-    /// swing of the ball enters the housing's forces at second order); at the design frequency (4.13 Hz,
-    /// the paper's 2:1 tuning) the free ball takes energy out of the beam, and the locked-ball
-    /// model overpredicts the stress RMS by more than half (measured ×2.2 over 60 s).
+    /// The lab study's physics, 60 s each: off the absorber's tuning (3.70 Hz) the ball hardly
+    /// moves and a model with it locked predicts the root stress within 2 % of the free-ball
+    /// truth (a small swing of the ball enters the housing's forces at second order; measured
+    /// 0.4 %); at the design frequency (4.13 Hz, the paper's 2:1 tuning) the free ball takes
+    /// energy out of the beam, and the locked-ball model overpredicts the stress RMS by more
+    /// than half (measured ×2.5; the free ball is chaotic there, its figures move with
+    /// rounding: ×2.2 before the full solver's block LU).
     ///
     /// The estimator (core, N = 3, f32, calibrated, fed the truth's noisy tip acceleration):
     /// off tuning it meets the twin's targets (dynamic RMS error ≤ 10 %, damage ratio 0.8–1.25;
-    /// measured 5.1–5.5 %, 1.02) with the ball left out or in its state; at the design
+    /// measured 4.5–6.8 %, 1.02) with the ball left out or in its state; at the design
     /// frequency it meets them where its model is right (the ball locked in truth and model:
-    /// 0.7 %, 1.00), and with the ball left out it misses by far (measured 252 %): the error
+    /// 0.5 %, 1.00), and with the ball left out it misses by far (measured 255 %): the error
     /// is the ball's, not the filter's; and the innovations say so.
     #[test]
     fn excluding_the_ball_costs_nothing_off_tuning_and_most_of_the_stress_on_it() {
@@ -1200,8 +1202,8 @@ mod twin_tests {
         let paper = Scene::paper();
         let mut off = Scene::paper();
         off.file.excitation.frequency = Some(3.70);
-        let (r_off, s_off) = lab(&off, 25.0, 0.05, load).expect("off tuning");
-        assert_eq!(s_off.time.len(), 25_000 / 3);
+        let (r_off, s_off) = lab(&off, 60.0, 0.05, load).expect("off tuning");
+        assert_eq!(s_off.time.len(), 20_000);
         assert!(
             r_off.exclusion_error_pct < 2.0,
             "{}",
@@ -1217,7 +1219,7 @@ mod twin_tests {
             assert!(e.stress_rms_error_pct <= 10.0, "{e:?}");
             assert!((0.8..=1.25).contains(&e.damage_ratio), "{e:?}");
         }
-        let (r_on, _) = lab(&paper, 25.0, 0.05, load).expect("on tuning");
+        let (r_on, _) = lab(&paper, 60.0, 0.05, load).expect("on tuning");
         assert!(r_on.impacts > 0, "the ball reaches the stops");
         assert!(
             r_on.locked_stress_rms_mpa > 1.5 * r_on.free_stress_rms_mpa,
@@ -1232,7 +1234,7 @@ mod twin_tests {
         assert!((0.8..=1.25).contains(&control.damage_ratio), "{control:?}");
         assert!(left_out.stress_rms_error_pct > 100.0, "{left_out:?}");
         // The monitor can tell: the innovations of the model without the ball are more than
-        // twice the control's (measured 10.7 vs 4.3 over 60 s).
+        // twice the control's (measured 9.4 vs 4.3).
         assert!(
             left_out.innovation_ratio > 2.0 * control.innovation_ratio,
             "{left_out:?} vs {control:?}"
