@@ -8,6 +8,14 @@
 //! calibrated so that its first frequency is the truth's) with the constant gain of [`design`].
 //! Scores: the RMS of the stress error as a percentage of the RMS of the true stress about its
 //! mean, and the ratio of estimated to true Miner damage (rainflow of the core's monitor).
+//!
+//! **Lab scene** ([`lab`], `host-sim estimate --lab`). The paper's arm with its free ball, no
+//! base motion, under a vortex-like tip force in lock-in episodes. Truth: the full solver with
+//! the ball free, and again with it locked. The estimator (core, `N = 3`, `f32`, calibrated to
+//! the 16-element reference) is fed each truth's tip acceleration through the sensor, with the
+//! ball left out of its model (locked-ball model), with the ball in its state (free-ball model,
+//! gain designed about the plumb ball), and, as the control, the locked-ball model on the
+//! locked truth. Scores as in the twin, plus the innovations' RMS over their steady-state sd.
 
 use crate::scene::Scene;
 use crate::wind::{LoadModel, Rng};
