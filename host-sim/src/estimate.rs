@@ -872,7 +872,7 @@ fn lab_estimate<S: CoreScene, const D: usize>(
 /// (the truth) and with it locked in the housing (a monitor model without the ball's motion) —
 /// and compares their root stress. Then the estimator (core, `N = 3`, `f32`, calibrated to
 /// the 16-element reference) is fed each truth's tip acceleration through the sensor (the
-/// scene's `[sensor]`, or [`lab_sensor`]'s MEMS part): with the ball left out of its model
+/// scene's `[sensor]`, or the mast arm's MEMS part at the scene's rate): with the ball left out of its model
 /// (locked) and with the ball in its state (free ball, `D = 13`), against the free truth; and,
 /// as the control where the model is right, the locked-ball estimator on the locked truth.
 pub fn lab(
