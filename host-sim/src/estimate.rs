@@ -397,6 +397,11 @@ fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }
 
+/// RMS of `x`.
+fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
 /// RMS of `x` about its mean.
 fn rms_about_mean(x: &[f64]) -> f64 {
     let m = mean(x);
@@ -439,12 +444,7 @@ pub fn twin(
     let category = arm_section_file.detail_category()?;
     let params = scene.params()?;
     let h = params.integrator.step;
-    if ((1.0 / h) / sensor.rate - 1.0).abs() > 1e-9 {
-        bail!(
-            "`integrator.step` ({h} s) must be 1 / `sensor.rate` ({} Hz): the estimator runs at the sensor rate",
-            sensor.rate
-        );
-    }
+    sensor.check_step(h)?;
     let loads = LoadModel::new(
         &f.loads,
         crate::scene::taper_of(arm_section_file, params.beam.length),
@@ -480,9 +480,8 @@ pub fn twin(
     pd.integrator.tolerance = 1e-13;
     pd.integrator.newton = absorber_core::NewtonKind::Full;
     let design_model = ArmModel::<f64>::arm_at_rest(pd, &arm, 0.0).map_err(core)?;
-    let g0 = 9.80665;
     let noise = FilterNoise {
-        measurement: sensor.noise_density_ug * 1e-6 * g0 * sensor.bandwidth.sqrt(),
+        measurement: sensor.noise_sd(),
         load_step,
         bias_step: 2.5e-6,
         load_time,
@@ -499,21 +498,18 @@ pub fn twin(
         model32,
         gain.cast::<f32>(),
         section32,
-        (sensor.range_g * g0) as f32,
+        sensor.range() as f32,
     )
     .map_err(core)?;
     // Run.
     let steps = (duration / h).round() as usize;
     let mut rng = Rng::new(sensor.seed);
-    let bias = sensor.bias_mg * 1e-3 * g0;
-    let range = sensor.range_g * g0;
     let mut series = TwinSeries::default();
     let mut innovations = Vec::with_capacity(steps);
     let (mut failed, mut clipped) = (0, 0);
     let tip = 4 * TRUTH_ELEMENTS + 1;
     // Zero-g calibration at installation: the arm at rest, one sample.
-    let y0 = (truth.state().a[4 * TRUTH_ELEMENTS + 1] + bias + noise.measurement * rng.normal())
-        .clamp(-range, range);
+    let y0 = sensor.read(truth.state().a[tip], &mut rng);
     est.initialize_bias(0.0, y0 as f32).map_err(core)?;
     let mut last_est = f64::from(est.root_stress());
     let static_est = last_est;
@@ -527,7 +523,7 @@ pub fn twin(
             .map_err(|e| anyhow!("truth step at t = {t:.3} s: {e}"))?;
         let st = truth.state();
         let sigma_true = truth_stress(&sec0, &section, st, params.gravity, line[0]);
-        let y = (st.a[tip] + bias + noise.measurement * rng.normal()).clamp(-range, range);
+        let y = sensor.read(st.a[tip], &mut rng);
         match est.update(0.0, y as f32) {
             Ok(e) => {
                 last_est = f64::from(e.root_stress);
@@ -555,10 +551,10 @@ pub fn twin(
         .zip(&series.estimate)
         .map(|(t, e)| e - t)
         .collect();
-    let rms_total = (err.iter().map(|x| x * x).sum::<f64>() / n).sqrt();
+    let rms_total = rms(&err);
     let offset = static_est - static_true;
     let err: Vec<f64> = err.iter().map(|e| e - offset).collect();
-    let rms_e = (err.iter().map(|x| x * x).sum::<f64>() / n).sqrt();
+    let rms_e = rms(&err);
     let sd = gain.stress_sd;
     let within = err.iter().filter(|e| e.abs() <= 2.0 * sd).count() as f64 / n;
     let [(d_true, c_true, r_true), (d_est, c_est, r_est)] =
@@ -601,10 +597,7 @@ pub fn twin(
         frequencies: (f_truth, f_reduced),
         bending_factor: factor,
         noise,
-        innovation_ratio: (innovations.iter().map(|x| x * x).sum::<f64>()
-            / innovations.len().max(1) as f64)
-            .sqrt()
-            / gain.innovation_sd,
+        innovation_ratio: rms(&innovations) / gain.innovation_sd,
         samples: steps,
         failed,
         clipped,
@@ -775,12 +768,7 @@ fn lab_sensor(scene: &Scene, h: f64) -> Result<crate::scene::SensorSection> {
         bandwidth: 0.25 / h,
         seed: 1,
     });
-    if ((1.0 / h) / sensor.rate - 1.0).abs() > 1e-9 {
-        bail!(
-            "`integrator.step` ({h} s) must be 1 / `sensor.rate` ({} Hz): the estimator runs at the sensor rate",
-            sensor.rate
-        );
-    }
+    sensor.check_step(h)?;
     Ok(sensor)
 }
 
@@ -820,47 +808,43 @@ fn lab_estimate<S: CoreScene, const D: usize>(
     let quiet = &measured[..measured
         .len()
         .min((1.0 / params.integrator.step).round() as usize)];
-    let mean = quiet.iter().sum::<f64>() / quiet.len().max(1) as f64;
-    est.initialize_bias(0.0, mean as f32).map_err(core)?;
+    est.initialize_bias(0.0, mean(quiet) as f32).map_err(core)?;
     let static_est = f64::from(est.root_stress());
     let mut last = static_est;
     let (mut failed, mut clipped) = (0, 0);
     let mut stress = Vec::with_capacity(rest.len());
-    let mut load2 = 0.0;
-    let (mut innovation2, mut innovations) = (0.0, 0usize);
+    let mut loads = Vec::with_capacity(rest.len());
+    let mut innovations = Vec::with_capacity(rest.len());
     for y in rest {
         match est.update(0.0, *y as f32) {
             Ok(e) => {
                 last = f64::from(e.root_stress);
                 clipped += usize::from(e.clipped);
                 if !e.clipped {
-                    innovation2 += f64::from(e.innovation).powi(2);
-                    innovations += 1;
+                    innovations.push(f64::from(e.innovation));
                 }
             }
             Err(_) => failed += 1,
         }
         stress.push(last);
-        load2 += f64::from(est.load()).powi(2);
+        loads.push(f64::from(est.load()));
     }
-    let n = stress.len().max(1) as f64;
     let offset = static_est - truth.static_stress;
     let rms_t = rms_about_mean(&truth.stress);
-    let rms_e = (stress
+    let err: Vec<f64> = stress
         .iter()
         .zip(&truth.stress)
-        .map(|(e, t)| (e - t - offset).powi(2))
-        .sum::<f64>()
-        / n)
-        .sqrt();
+        .map(|(e, t)| e - t - offset)
+        .collect();
+    let rms_e = rms(&err);
     let [(e_true, _, _), (e_est, _, _)] = damages(DetailCategory::EPrime, &truth.stress, &stress)?;
     let report = LabEstimate {
         case,
         stress_rms_error_pct: 100.0 * rms_e / rms_t,
         damage_ratio: e_est / e_true,
         stress_sd_mpa: gain.stress_sd / 1e6,
-        load_rms: (load2 / n).sqrt(),
-        innovation_ratio: (innovation2 / innovations.max(1) as f64).sqrt() / gain.innovation_sd,
+        load_rms: rms(&loads),
+        innovation_ratio: rms(&innovations) / gain.innovation_sd,
         failed,
         clipped,
     };
@@ -981,10 +965,9 @@ pub fn lab(
     // The monitor does not know the ball's angle: its model starts with the ball plumb, the
     // static state its gain is designed about.
     pc.ball.initial_angle = 0.0;
-    let g0 = 9.80665;
-    let range = sensor.range_g * g0;
+    let range = sensor.range();
     let noise = FilterNoise {
-        measurement: sensor.noise_density_ug * 1e-6 * g0 * sensor.bandwidth.sqrt(),
+        measurement: sensor.noise_sd(),
         // By default the random walk follows the forcing's largest change per sample, 2π f A h.
         load_step: load
             .step
@@ -995,11 +978,10 @@ pub fn lab(
     };
     let measure = |truth: &LabTruth| -> Vec<f64> {
         let mut rng = Rng::new(sensor.seed);
-        let bias = sensor.bias_mg * 1e-3 * g0;
         truth
             .tip_accel
             .iter()
-            .map(|a| (a + bias + noise.measurement * rng.normal()).clamp(-range, range))
+            .map(|a| sensor.read(*a, &mut rng))
             .collect()
     };
     let (y_free, y_locked) = (measure(&free), measure(&locked));
@@ -1326,9 +1308,8 @@ pub fn firmware_constants(scene: &Scene) -> Result<String> {
     pd.integrator.tolerance = 1e-13;
     pd.integrator.newton = absorber_core::NewtonKind::Full;
     let section = root_section(&params, &arm)?;
-    let g0 = 9.80665;
     let noise = FilterNoise {
-        measurement: sensor.noise_density_ug * 1e-6 * g0 * sensor.bandwidth.sqrt(),
+        measurement: sensor.noise_sd(),
         load_step: 0.5,
         bias_step: 2.5e-6,
         load_time: 5.0,
@@ -1402,7 +1383,7 @@ pub fn firmware_constants(scene: &Scene) -> Result<String> {
         b(s.bending_rigidity),
         b(s.stress_per_curvature),
         b(s.extreme_fibre),
-        b((sensor.range_g * g0) as f32),
+        b(sensor.range() as f32),
         category
     ));
     o.push_str(&format!(

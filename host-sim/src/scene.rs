@@ -514,7 +514,38 @@ impl ArmSection {
     }
 }
 
+/// Standard gravity \[m/s²\]: the g of the sensor's units.
+pub const G0: f64 = 9.80665;
+
 impl SensorSection {
+    /// White-noise standard deviation of a reading, noise density · √bandwidth \[m/s²\].
+    pub fn noise_sd(&self) -> f64 {
+        self.noise_density_ug * 1e-6 * G0 * self.bandwidth.sqrt()
+    }
+
+    /// The range ± \[m/s²\].
+    pub fn range(&self) -> f64 {
+        self.range_g * G0
+    }
+
+    /// One reading of the true acceleration `a` \[m/s²\]: plus the bias and white noise
+    /// (σ = [`SensorSection::noise_sd`], drawn from `rng`), clipped at the range.
+    pub fn read(&self, a: f64, rng: &mut crate::wind::Rng) -> f64 {
+        let range = self.range();
+        (a + self.bias_mg * 1e-3 * G0 + self.noise_sd() * rng.normal()).clamp(-range, range)
+    }
+
+    /// The estimator runs at the sensor rate: the step `h` must be `1 / rate`.
+    pub fn check_step(&self, h: f64) -> Result<()> {
+        if ((1.0 / h) / self.rate - 1.0).abs() > 1e-9 {
+            bail!(
+                "`integrator.step` ({h} s) must be 1 / `sensor.rate` ({} Hz): the estimator runs at the sensor rate",
+                self.rate
+            );
+        }
+        Ok(())
+    }
+
     /// Checks the values (errors name the key).
     pub fn validate(&self) -> Result<()> {
         finite_positive(self.noise_density_ug, "sensor.noise_density_ug")?;
