@@ -48,7 +48,9 @@
 //! Impulses use the stops' metric ([`crate::ImpactModel`]): the step's Newmark matrix by default
 //! (an impulse in the mass-matrix metric kicks the housing's stiff end-rotation mode), the mass
 //! matrix for an instantaneous impact. At most one event
-//! splits a step; an event found at the end of the rest of the step is applied there.
+//! splits a step; an event found at the end of the rest of the step is applied there. With
+//! events at the step end ([`crate::EventLocation::StepEnd`]) nothing splits a step: the events
+//! act at its end, without a consistent acceleration (`flight_events_at_end`, docs/model.md).
 
 use crate::error::Error;
 use crate::model::{Contact, Impact, Side, State, StepReport};
@@ -137,7 +139,7 @@ pub fn separation_fraction<T: Real>(n_start: T, n_end: T) -> T {
 /// interpolant (error O(h⁴)), by Newton from the linear root, six iterations at most. The stop
 /// crossing, the landing and the stops in flight of both solvers use it.
 pub fn hermite_root<T: Real>(a0: T, d0: T, a1: T, d1: T) -> T {
-    let (two, three, six) = (lit::<T>(2.0), lit::<T>(3.0), lit::<T>(6.0));
+    let (two, three) = (lit::<T>(2.0), lit::<T>(3.0));
     let linear = a0 / (a0 - a1);
     let mut tau = if linear.is_finite() {
         linear.max(T::zero()).min(T::one())
@@ -150,9 +152,7 @@ pub fn hermite_root<T: Real>(a0: T, d0: T, a1: T, d1: T) -> T {
             + (t3 - two * t2 + tau) * d0
             + (three * t2 - two * t3) * a1
             + (t3 - t2) * d1;
-        let dp = (six * t2 - six * tau) * (a0 - a1)
-            + (three * t2 - lit::<T>(4.0) * tau + T::one()) * d0
-            + (three * t2 - two * tau) * d1;
+        let dp = hermite_rate(a0, d0, a1, d1, tau);
         if !is_positive(dp.abs()) {
             break;
         }
@@ -163,6 +163,16 @@ pub fn hermite_root<T: Real>(a0: T, d0: T, a1: T, d1: T) -> T {
         tau = next.max(T::zero()).min(T::one());
     }
     tau
+}
+
+/// Rate of the cubic Hermite interpolant of [`hermite_root`] at the fraction `tau`, in units of
+/// the scaled rates: `dp/dτ`, so that the function's time derivative there is `dp/dτ / h`.
+pub fn hermite_rate<T: Real>(a0: T, d0: T, a1: T, d1: T, tau: T) -> T {
+    let (two, three, six) = (lit::<T>(2.0), lit::<T>(3.0), lit::<T>(6.0));
+    let t2 = tau * tau;
+    (six * t2 - six * tau) * (a0 - a1)
+        + (three * t2 - lit::<T>(4.0) * tau + T::one()) * d0
+        + (three * t2 - two * tau) * d1
 }
 
 /// The landing bounces (the ball flies on) unless it is slow, `e_n v_n < v_stick`, or the
@@ -432,6 +442,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         next: &mut State<T, D>,
     ) -> Result<(), Error> {
         let h = self.params.integrator.step;
+        if self.events_at_step_end() {
+            // At the step's end: the trial stands and the ball takes off where it ended.
+            report.separation = Some(start.time + h);
+            self.fly_from_track(next);
+            return Ok(());
+        }
         let tau = separation_fraction(self.normal_force(start), n_end);
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
@@ -451,6 +467,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
     ) -> Result<(), Error> {
+        self.fly_from_track(s);
+        self.restart_acceleration(s, ws, report)
+    }
+
+    /// The flying state of a rolling ball at `s`: its centre and velocity from the rolling
+    /// kinematics (continuous), the effective gravity as its acceleration.
+    fn fly_from_track(&self, s: &mut State<T, D>) {
         let (c, c_rate) = self.ball_centre(s);
         let g = [T::zero(), -self.effective_gravity(s.base_accel)];
         s.flight = Flight {
@@ -460,7 +483,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             pseudo_accel: g,
         };
         s.contact = Contact::InFlight;
-        self.restart_acceleration(s, ws, report)
     }
 
     /// The consistent acceleration after a jump of velocity or mode; the generalized-α
@@ -538,14 +560,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let rho = self.params.ball.path_radius();
         let mut tau = T::one();
         let mut event = None;
+        let mut landing_speed = None;
         let end_rel = self.relative(trial);
         if end_rel.r > rho {
             let (r0, r1) = (self.relative(start), end_rel);
             let rate = |r: &Relative<T>| (r.d[0] * r.rate[0] + r.d[1] * r.rate[1]) / r.r;
-            tau = hermite_root(r0.r - rho, rate(&r0) * h, r1.r - rho, rate(&r1) * h);
+            let (d0, m0, d1, m1) = (r0.r - rho, rate(&r0) * h, r1.r - rho, rate(&r1) * h);
+            tau = hermite_root(d0, m0, d1, m1);
             event = Some(None);
+            landing_speed = Some(hermite_rate(d0, m0, d1, m1, tau) / h);
         }
-        if let Some((side, inside, t)) = self.stop_crossing(start, trial) {
+        let stop = self.stop_crossing(start, trial);
+        if let Some((side, inside, t)) = stop {
             if event.is_none() || t < tau {
                 tau = t;
                 event = Some(Some((side, inside)));
@@ -554,6 +580,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let Some(event) = event else {
             return Ok(());
         };
+        if self.events_at_step_end() {
+            let stop = stop.map(|(side, inside, _)| (side, inside));
+            return self.flight_events_at_end(start, trial, stop, landing_speed, ws, report);
+        }
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
         let mut mid = *start;
@@ -567,6 +597,55 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
         }
         self.flight_rest(&mid, h - h1, base_accel, ws, report, trial)
+    }
+
+    /// The flight events of a step put at its end ([`crate::EventLocation::StepEnd`]): the
+    /// trial from `start` stands as `s`; the stop it crossed, if any, and then the landing, if
+    /// its end is beyond the circle, act there, with the trial's own factors as the flight
+    /// metric. The acceleration stays the trial's ([`crate::EventLocation::StepEnd`]: the next
+    /// step starts from it, not from a consistent one). The landing's bounce is decided, and its
+    /// rebound set, by `landing_speed`, the normal speed at the crossing (the rate of the
+    /// Hermite interpolant whose root is the crossing): at the step's end the ball has been
+    /// pressed on for the rest of the step, and deciding on that speed made landings chatter
+    /// (docs/model.md). Kept out of line (rare).
+    #[inline(never)]
+    #[cold]
+    fn flight_events_at_end(
+        &self,
+        start: &State<T, D>,
+        s: &mut State<T, D>,
+        stop: Option<(Side, bool)>,
+        landing_speed: Option<T>,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<(), Error> {
+        s.time = start.time + self.params.integrator.step;
+        if let Some((side, inside)) = stop {
+            report.impact = Some(self.stop_impulse(s, side, inside, ws)?);
+        }
+        if let Some(speed) = landing_speed {
+            if self.relative(s).r > self.params.ball.path_radius() {
+                self.land_impulse(s, Some(speed), ws, report)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Makes the flight mode's impulse metric the current factors: with events at the step end
+    /// the trial's own Newton matrix when it is that metric (as the stops' impact at the step
+    /// end), else [`Self::metric_factors`] at `s`.
+    fn flight_metric(
+        &self,
+        s: &State<T, D>,
+        ws: &mut Workspace<T, D>,
+        scratch: &mut SVector<T, D>,
+    ) -> Result<(), Error> {
+        let over_step = self.params.ball.impact_model == ImpactModel::OverStep;
+        let c_q = self.newmark_chain(self.params.integrator.step).c_q;
+        if self.events_at_step_end() && over_step && ws.has_factors(c_q, Contact::InFlight) {
+            return Ok(());
+        }
+        self.metric_factors(s, Contact::InFlight, ws, scratch)
     }
 
     /// Factors the impulse metric of the mode `contact` at the configuration of `s`: the
@@ -606,13 +685,30 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// The landing at the crossing `s` (module doc): the centre put on the circle, then a
-    /// bounce or a plastic, rough landing.
+    /// bounce or a plastic, rough landing, and the consistent acceleration.
     fn land(
         &self,
         s: &mut State<T, D>,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
     ) -> Result<(), Error> {
+        if self.land_impulse(s, None, ws, report)? {
+            self.restart_acceleration(s, ws, report)?;
+        }
+        Ok(())
+    }
+
+    /// The landing's projection and impulse at `s` (no acceleration): whether the velocities
+    /// jumped. `crossing_speed`: the normal speed at the crossing when `s` is a step's end past
+    /// it ([`Self::flight_events_at_end`]); it decides the bounce and sets the rebound to
+    /// `−e_n` times it. `None`: `s` is the crossing.
+    fn land_impulse(
+        &self,
+        s: &mut State<T, D>,
+        crossing_speed: Option<T>,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<bool, Error> {
         let ball = &self.params.ball;
         let rho = ball.path_radius();
         let rel = self.relative(s);
@@ -624,11 +720,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         s.flight.centre = [a[0] + rho * n[0], a[1] + rho * n[1]];
         let normal_speed = n[0] * rel.rate[0] + n[1] * rel.rate[1];
         if !is_positive(normal_speed) {
-            return Ok(()); // grazing: no impulse, the ball flies on
+            return Ok(false); // grazing: no impulse, the ball flies on
         }
+        let speed = crossing_speed.map_or(normal_speed, |c| c.max(T::zero()));
         let mut landing = Landing {
             time: s.time,
-            normal_speed,
+            normal_speed: speed,
             normal_impulse: T::zero(),
             tangential_impulse: T::zero(),
             bounced: false,
@@ -645,13 +742,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             + tangential * tangential / rho;
         let bounces = landing_bounces(
             ball.landing_restitution,
-            normal_speed,
+            speed,
             rho * ball.stick_speed,
             pressed * self.params.integrator.step,
         );
         if bounces {
             let mut y = SVector::<T, D>::zeros();
-            self.metric_factors(s, Contact::InFlight, ws, &mut y)?;
+            self.flight_metric(s, ws, &mut y)?;
             y.fill(T::zero());
             self.put_end(&mut y, [n[0], n[1], T::zero(), T::zero()]);
             ws.solve(&mut y)?;
@@ -659,7 +756,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             if !is_positive(k) {
                 return Err(Error::Singular);
             }
-            let p = bounce_impulse(normal_speed, k, ball.landing_restitution);
+            let p = match crossing_speed {
+                None => bounce_impulse(normal_speed, k, ball.landing_restitution),
+                // From the end's normal speed to −e_n times the crossing's.
+                Some(_) => (normal_speed + ball.landing_restitution * speed) / k,
+            };
             s.v.axpy(p, &y, T::one());
             for (c, nk) in s.flight.velocity.iter_mut().zip(n.iter()) {
                 *c -= p / ball.mass * *nk;
@@ -709,11 +810,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             landing.tangential_impulse = cos * jx + sin * jy;
         }
         report.landing = Some(landing);
-        self.restart_acceleration(s, ws, report)
+        Ok(true)
     }
 
     /// A stop hit by the flying ball at `s` (module doc): the centre rotated about A onto the
-    /// stop line, a frictionless impulse along `∇α_f`; the ball flies on.
+    /// stop line, a frictionless impulse along `∇α_f`; the ball flies on. Then the consistent
+    /// acceleration.
     fn stop_in_flight(
         &self,
         s: &mut State<T, D>,
@@ -721,6 +823,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         inside: bool,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
+    ) -> Result<Impact<T>, Error> {
+        let impact = self.stop_impulse(s, side, inside, ws)?;
+        self.restart_acceleration(s, ws, report)?;
+        Ok(impact)
+    }
+
+    /// The projection and impulse of [`Self::stop_in_flight`] (no acceleration).
+    fn stop_impulse(
+        &self,
+        s: &mut State<T, D>,
+        side: Side,
+        inside: bool,
+        ws: &mut Workspace<T, D>,
     ) -> Result<Impact<T>, Error> {
         let ball = &self.params.ball;
         let x = Self::local(&s.q, &s.v, &s.a);
@@ -757,7 +872,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             let s2 = a3 * a3 + a4 * a4;
             let grad = [-cos / rel.r, -sin / rel.r, a4 / s2, -a3 / s2];
             let mut y = SVector::<T, D>::zeros();
-            self.metric_factors(s, Contact::InFlight, ws, &mut y)?;
+            self.flight_metric(s, ws, &mut y)?;
             y.fill(T::zero());
             self.put_end(&mut y, grad);
             ws.solve(&mut y)?;
@@ -773,7 +888,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             impact.impulse = lambda / rel.r;
             impact.energy_loss = lit::<T>(0.5) * (T::one() - e * e) * speed * speed / k;
         }
-        self.restart_acceleration(s, ws, report)?;
         Ok(impact)
     }
 

@@ -134,23 +134,26 @@ pub struct Integrator<T> {
     pub events: EventLocation,
 }
 
-/// Where a stop impact of the rolling ball inside a time step is put ([`Integrator::events`]).
+/// Where an event inside a time step is put ([`Integrator::events`]): a stop impact, the
+/// ball's separation from the track, its landing, a stop hit in flight.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EventLocation {
     /// At its crossing inside the step (default): the step is redone as a sub-step to the
-    /// crossing, the impact, and a sub-step for the rest. Exact impact timing (the crossing of
-    /// a cubic Hermite interpolant, error O(h⁴)); an impact step solves up to five Newton
+    /// crossing, the event, and a sub-step for the rest. Exact event timing (the crossing of
+    /// a cubic Hermite interpolant, error O(h⁴)); an event step solves up to five Newton
     /// matrices (the trial, the sub-step, the impulse metric, the consistent acceleration,
     /// the rest).
     Crossing,
-    /// At the end of the step in which it happened: the trial step stands, its end state is
-    /// projected onto the stop and the impulse applied there with the trial's own Newton
-    /// matrix as metric; only the consistent acceleration needs a new one. The impact is late
-    /// by less than one step (its effect on the response and the restitution law is measured
-    /// in `docs/accuracy.md`), and an impact step costs about two ordinary ones: a bounded
-    /// worst case for firmware with a hard deadline per sample. Flight events keep their
-    /// crossing: put at the step end, landings chattered (thousands of bounces where the
-    /// crossing gives a hundred) and the flying ball passed the stops.
+    /// At the end of the step in which it happened: the trial step stands; at its end the
+    /// ball is put back on the stop or the circle, the impulse is applied with the trial's
+    /// own Newton matrix as metric (a plastic landing factors the rolling one), a separation
+    /// switches the ball to flight; the acceleration stays the trial's (no consistent
+    /// acceleration: the next step's Newton then starts near its solution). A landing bounces,
+    /// and rebounds at `−e_n` times, the normal speed at its crossing (Hermite rate), not at the
+    /// step's end: deciding on the end's speed made landings chatter. An event is late by less
+    /// than one step (its effect on the response and the restitution law is measured in
+    /// `docs/accuracy.md`), and no step costs more than about two ordinary ones: a bounded worst
+    /// case for firmware with a hard deadline per sample (`docs/embedded.md`).
     StepEnd,
 }
 

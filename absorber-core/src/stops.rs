@@ -14,6 +14,9 @@
 //! alone), reused within it ([`crate::newton`]): an impact step factors about five times where
 //! an ordinary step factors once (docs/embedded.md measures the worst step).
 //!
+//! With events at the step end ([`crate::EventLocation::StepEnd`]) the trial stands and the
+//! impact acts at its end (`impact_at_end`): no sub-steps, no consistent acceleration.
+//!
 //! A ball resting on a stop is held there (`φ = ψ − (ρ/r_b) α_stop`) until the stop would have
 //! to pull it.
 
@@ -84,9 +87,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// The impact of a step whose trial end `s` crossed a stop, put at the step's end
-    /// ([`EventLocation::StepEnd`]): `s` projected onto the stop, the impulse in the trial's
-    /// own Newton matrix (the over-step metric, already factored), and the consistent
-    /// acceleration. Kept out of line (rare).
+    /// ([`EventLocation::StepEnd`]): `s` projected onto the stop and the impulse in the trial's
+    /// own Newton matrix (the over-step metric, already factored); the acceleration stays the
+    /// trial's (docs/model.md: a consistent one made the next step's Newton slow). Kept out of
+    /// line (rare).
     #[inline(never)]
     #[cold]
     fn impact_at_end(
@@ -99,15 +103,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         report: &mut StepReport<T>,
     ) -> Result<(), Error> {
         s.time = start.time + self.params.integrator.step;
-        let impact = self.impact(s, side, inside, ws)?;
-        if !impact.stuck {
-            let acc = self.consistent_acceleration(s, ws, self.params.integrator.newton)?;
-            report.iterations += acc.iterations;
-            s.a = acc.x;
-        }
-        // The velocity jumped: the generalized-α recursion restarts from the new acceleration.
-        s.pseudo_accel = s.a;
-        report.impact = Some(impact);
+        // The acceleration stays the trial's (a stuck ball's is made consistent by `impact`).
+        report.impact = Some(self.impact(s, side, inside, ws)?);
         Ok(())
     }
 

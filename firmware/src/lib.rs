@@ -190,12 +190,12 @@ impl Config for Modified {
     }
 }
 
-/// Stop impacts put at the end of their step (`EventLocation::StepEnd`: no sub-steps, the
-/// bounded worst case).
+/// Events put at the end of their step (`EventLocation::StepEnd`: no sub-steps, the bounded
+/// worst case).
 pub struct StepEndImpacts;
 
 impl Config for StepEndImpacts {
-    const NAME: &'static str = "stop impacts at the step end";
+    const NAME: &'static str = "events at the step end";
     fn apply(p: &mut Params<f32>) {
         p.integrator.events = absorber_core::EventLocation::StepEnd;
     }
@@ -207,7 +207,7 @@ pub struct Configured<M, C>(pub M, core::marker::PhantomData<C>);
 /// The model stepped with modified Newton, otherwise `Params::default()`.
 pub type ModifiedNewton<M> = Configured<M, Modified>;
 
-/// The model with stop impacts at the step end, otherwise `Params::default()`.
+/// The model with events at the step end, otherwise `Params::default()`.
 pub type StepEnd<M> = Configured<M, StepEndImpacts>;
 
 impl<S: Scene, const N: usize, const D: usize, C: Config> Sim

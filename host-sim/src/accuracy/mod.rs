@@ -80,8 +80,8 @@ pub struct Config {
     pub rule: Rule,
     /// Calibration factors (bending, axial, lumped fraction; [`calibrated`]) or none.
     pub calibration: Option<[f64; 3]>,
-    /// Stop impacts at the end of their step (`EventLocation::StepEnd`) instead of their
-    /// crossing.
+    /// Events (stop impacts, separation, landing) at the end of their step
+    /// (`EventLocation::StepEnd`) instead of their crossing.
     #[serde(default)]
     pub step_end: bool,
 }

@@ -165,7 +165,7 @@ fn all_candidates() -> Result<Vec<Config>> {
     for n in [2, 3, 4, 6] {
         cands.push(calibrated(Config::DEFAULT.with(|c| c.elements = n), 16)?);
     }
-    // Stop impacts at the step end (the bounded worst step), default and calibrated N = 3.
+    // Events at the step end (the bounded worst step), default and calibrated N = 3.
     cands.push(Config::DEFAULT.with(|c| c.step_end = true));
     cands.push(calibrated(Config::DEFAULT.with(|c| c.step_end = true), 16)?);
     Ok(cands)
