@@ -114,13 +114,14 @@
 #define ABSORBER_NEWTON_MODIFIED 2
 
 /**
- * `integrator.events`: a stop impact splits the step at its crossing (default).
+ * `integrator.events`: an event (stop impact, separation, landing) splits the step at its
+ * crossing (default).
  */
 #define ABSORBER_EVENTS_CROSSING 0
 
 /**
- * `integrator.events`: a stop impact is put at the end of its step (bounded cost per sample;
- * late by less than a step; flight events keep their crossing).
+ * `integrator.events`: every event is put at the end of its step (bounded cost per sample:
+ * worst step under twice the mean; late by less than a step).
  */
 #define ABSORBER_EVENTS_STEP_END 1
 

@@ -160,10 +160,11 @@ pub const ABSORBER_NEWTON_PER_STEP: u32 = 0;
 pub const ABSORBER_NEWTON_FULL: u32 = 1;
 /// `integrator.newton`: modified Newton (matrix kept across steps).
 pub const ABSORBER_NEWTON_MODIFIED: u32 = 2;
-/// `integrator.events`: a stop impact splits the step at its crossing (default).
+/// `integrator.events`: an event (stop impact, separation, landing) splits the step at its
+/// crossing (default).
 pub const ABSORBER_EVENTS_CROSSING: u32 = 0;
-/// `integrator.events`: a stop impact is put at the end of its step (bounded cost per sample;
-/// late by less than a step; flight events keep their crossing).
+/// `integrator.events`: every event is put at the end of its step (bounded cost per sample:
+/// worst step under twice the mean; late by less than a step).
 pub const ABSORBER_EVENTS_STEP_END: u32 = 1;
 /// `threshold_rule` of the monitor: cycles at or below the CAFT do no damage (default).
 pub const ABSORBER_THRESHOLD_CUTOFF: u32 = 0;
