@@ -100,7 +100,8 @@ impl<T: Real> Flight<T> {
 pub struct Landing<T> {
     /// Time of the landing \[s\].
     pub time: T,
-    /// Normal speed towards the track before the landing, `n·(ċ − Ȧ)` \[m/s\].
+    /// Normal speed towards the track before the landing, `n·(ċ − Ȧ)` \[m/s\] (with events at
+    /// the step end: at the crossing, the rate of the Hermite interpolant whose root it is).
     pub normal_speed: T,
     /// Normal impulse of the track on the ball, towards A \[N·s\].
     pub normal_impulse: T,
