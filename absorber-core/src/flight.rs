@@ -55,11 +55,10 @@
 use crate::error::Error;
 use crate::model::{Contact, Impact, Side, State, StepReport};
 use crate::newton::Workspace;
-use crate::params::ImpactModel;
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
-use crate::system::{Problem, System};
-use crate::tip::{self, Chain};
+use crate::system::System;
+use crate::tip;
 use nalgebra::SVector;
 
 /// A flying ball whose polar angle starts a step this close beyond a stop \[rad\] is still on
@@ -603,7 +602,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The flight events of a step put at its end ([`crate::EventLocation::StepEnd`]): the
     /// trial from `start` stands as `s`; the stop it crossed, if any, and then the landing, if
     /// its end is beyond the circle, act there, with the trial's own factors as the flight
-    /// metric. The acceleration stays the trial's ([`crate::EventLocation::StepEnd`]: the next
+    /// metric ([`Self::impulse_metric`]). The acceleration stays the trial's ([`crate::EventLocation::StepEnd`]: the next
     /// step starts from it, not from a consistent one). The landing's bounce is decided, and its
     /// rebound set, by `landing_speed`, the normal speed at the crossing (the rate of the
     /// Hermite interpolant whose root is the crossing): at the step's end the ball has been
@@ -630,59 +629,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
         }
         Ok(())
-    }
-
-    /// Makes the flight mode's impulse metric the current factors: with events at the step end
-    /// the trial's own Newton matrix when it is that metric (as the stops' impact at the step
-    /// end), else [`Self::metric_factors`] at `s`.
-    fn flight_metric(
-        &self,
-        s: &State<T, D>,
-        ws: &mut Workspace<T, D>,
-        scratch: &mut SVector<T, D>,
-    ) -> Result<(), Error> {
-        let over_step = self.params.ball.impact_model == ImpactModel::OverStep;
-        let c_q = self.newmark_chain(self.params.integrator.step).c_q;
-        if self.events_at_step_end() && over_step && ws.has_factors(c_q, Contact::InFlight) {
-            return Ok(());
-        }
-        self.metric_factors(s, Contact::InFlight, ws, scratch)
-    }
-
-    /// Factors the impulse metric of the mode `contact` at the configuration of `s`: the
-    /// Newmark matrix `W = M + γhC + βh²K` of a whole step ([`ImpactModel::OverStep`], as the
-    /// stops: the impulse spread over the step does not kick the housing's stiff end-rotation
-    /// mode), or the mass matrix ([`ImpactModel::Instantaneous`]).
-    /// `scratch` takes the assembly's residual (not needed; no vector of its own in the frame).
-    fn metric_factors(
-        &self,
-        s: &State<T, D>,
-        contact: Contact,
-        ws: &mut Workspace<T, D>,
-        scratch: &mut SVector<T, D>,
-    ) -> Result<(), Error> {
-        let ch = if self.params.ball.impact_model == ImpactModel::OverStep {
-            self.newmark_chain(self.params.integrator.step)
-        } else {
-            Chain {
-                c_q: T::zero(),
-                c_v: T::zero(),
-                c_m: T::one(),
-            }
-        };
-        // Assembled at (q, v, a) of `s` as given to `refresh_at`; the problem's own chain
-        // origin is not used by an assembly.
-        let p = Problem {
-            q0: &s.q,
-            v0: &s.v,
-            a0: &s.a,
-            ch,
-            c_pos: T::one(),
-            g_eff: self.effective_gravity(s.base_accel),
-            contact,
-            plumb: false,
-        };
-        self.refresh_at(&p, [&s.q, &s.v, &s.a], ws, scratch)
     }
 
     /// The landing at the crossing `s` (module doc): the centre put on the circle, then a
@@ -749,7 +695,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         );
         if bounces {
             let mut y = SVector::<T, D>::zeros();
-            self.flight_metric(s, ws, &mut y)?;
+            // With events at the step end the trial's own factors serve (docs/model.md).
+            let reuse = self.events_at_step_end();
+            self.impulse_metric(s, Contact::InFlight, reuse, ws, &mut y)?;
             y.fill(T::zero());
             self.put_end(&mut y, [n[0], n[1], T::zero(), T::zero()]);
             ws.solve(&mut y)?;
@@ -796,7 +744,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             let s2 = a3 * a3 + a4 * a4;
             let w = rho * i.orbit_per_tilt * along / s2;
             let mut y = SVector::<T, D>::zeros();
-            self.metric_factors(s, s.contact, ws, &mut y)?;
+            self.impulse_metric(s, s.contact, false, ws, &mut y)?;
             y.fill(T::zero());
             self.put_end(&mut y, [delta[0], delta[1], -w * a4, w * a3]);
             if let Some(spin) = y.get_mut(Self::SPIN) {
@@ -873,7 +821,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             let s2 = a3 * a3 + a4 * a4;
             let grad = [-cos / rel.r, -sin / rel.r, a4 / s2, -a3 / s2];
             let mut y = SVector::<T, D>::zeros();
-            self.flight_metric(s, ws, &mut y)?;
+            // With events at the step end the trial's own factors serve (docs/model.md).
+            let reuse = self.events_at_step_end();
+            self.impulse_metric(s, Contact::InFlight, reuse, ws, &mut y)?;
             y.fill(T::zero());
             self.put_end(&mut y, grad);
             ws.solve(&mut y)?;

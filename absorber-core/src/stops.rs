@@ -241,7 +241,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         if towards > T::zero() {
             let e = if plastic { T::zero() } else { ball.restitution };
             let mut y = grad;
-            self.impulse_matrix(s, ws, &mut y)?;
+            self.impulse_metric(s, Contact::Off, true, ws, &mut y)?;
             y = grad;
             ws.solve(&mut y)?;
             let w = grad.dot(&y);
@@ -279,17 +279,23 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         Ok(impact)
     }
 
-    /// Makes the impulse metric the current factors: the step's Newmark matrix when it is
-    /// there (over-step model), else a fresh one (or the mass matrix) at the impact state.
-    /// `scratch` takes the assembly's residual (not needed; no vector of its own in the frame).
-    fn impulse_matrix(
+    /// Makes the impulse metric of the mode `contact` the current factors: the Newmark matrix
+    /// `W = M + γhC + βh²K` of a whole step ([`ImpactModel::OverStep`]: the impulse spread over
+    /// the step does not kick the housing's stiff end-rotation mode), or the mass matrix
+    /// ([`ImpactModel::Instantaneous`]). With `reuse`, the current factors serve when they were
+    /// built for that matrix (the step's own: an impact at the step's start, or at its end);
+    /// else it is assembled and factored at the configuration of `s`. `scratch` takes the
+    /// assembly's residual (not needed; no vector of its own in the frame). The stops' and the
+    /// flying ball's impulses share it.
+    pub(crate) fn impulse_metric(
         &self,
         s: &State<T, D>,
+        contact: Contact,
+        reuse: bool,
         ws: &mut Workspace<T, D>,
         scratch: &mut SVector<T, D>,
     ) -> Result<(), Error> {
-        let over_step = self.params.ball.impact_model == ImpactModel::OverStep;
-        let ch = if over_step {
+        let ch = if self.params.ball.impact_model == ImpactModel::OverStep {
             self.newmark_chain(self.params.integrator.step)
         } else {
             Chain {
@@ -298,8 +304,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 c_m: T::one(),
             }
         };
-        if ws.has_factors(ch.c_q, Contact::Off) {
-            // The step's own W (an impact right at the step start reuses the trial's).
+        if reuse && ws.has_factors(ch.c_q, contact) {
             return Ok(());
         }
         // Assembled at (q, v, a) of `s` as given to `refresh_at`; the problem's own chain
@@ -311,7 +316,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             ch,
             c_pos: T::one(),
             g_eff: self.effective_gravity(s.base_accel),
-            contact: Contact::Off,
+            contact,
             plumb: false,
         };
         self.refresh_at(&p, [&s.q, &s.v, &s.a], ws, scratch)
