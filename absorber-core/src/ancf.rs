@@ -525,27 +525,35 @@ impl<T: Real> AxialQuadrature<T> {
             }
             *rr_p = [*w * (r1 * r1 + eps), *w * (r1 * r2), *w * (r2 * r2 + eps)];
         }
-        // Built in place (no zeroed array first): the blocks below the diagonal stay zero and
-        // are never read.
-        let blocks = core::array::from_fn(|i| {
-            core::array::from_fn(|j| {
-                let mut acc = [T::zero(); 3];
-                if j < i {
-                    return acc;
-                }
-                for (sx, rr_p) in self.sx.iter().zip(rr.iter()) {
-                    let (Some(si), Some(sj)) = (sx.get(i), sx.get(j)) else {
-                        continue;
-                    };
-                    let sij = *si * *sj;
-                    for (b, r) in acc.iter_mut().zip(rr_p.iter()) {
-                        *b += sij * *r;
-                    }
-                }
-                acc
-            })
-        });
+        // Built in place (no zeroed array first), every block by the same inlined sum with
+        // constant indices: straight-line code on every target. The blocks below the diagonal
+        // stay zero and are never read.
+        let b = |i: usize, j: usize| Self::block_sum(&self.sx, &rr, i, j);
+        let z = [T::zero(); 3];
+        let blocks = [
+            [b(0, 0), b(0, 1), b(0, 2), b(0, 3)],
+            [z, b(1, 1), b(1, 2), b(1, 3)],
+            [z, z, b(2, 2), b(2, 3)],
+            [z, z, z, b(3, 3)],
+        ];
         (f, blocks)
+    }
+
+    /// Block `(i, j)` of the axial tangent, `Σ_p S_i S_j w_p R_p` as `(xx, xy, yy)`, summed over
+    /// the Gauss points in order (`rr[p] = w_p R_p`).
+    #[inline(always)]
+    fn block_sum(sx: &[[T; 4]; 5], rr: &[[T; 3]; 5], i: usize, j: usize) -> [T; 3] {
+        let mut acc = [T::zero(); 3];
+        for (sx, rr_p) in sx.iter().zip(rr.iter()) {
+            let (Some(si), Some(sj)) = (sx.get(i), sx.get(j)) else {
+                continue;
+            };
+            let sij = *si * *sj;
+            for (b, r) in acc.iter_mut().zip(rr_p.iter()) {
+                *b += sij * *r;
+            }
+        }
+        acc
     }
 
     /// Axial force `Q_l` and its tangent `K_l`, whose entries are handed to `put(row, col,
