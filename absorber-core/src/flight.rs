@@ -456,7 +456,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         mid.time = start.time + h1;
         self.take_off(&mut mid, ws, report)?;
         report.separation = Some(mid.time);
-        self.flight_rest(&mid, h - h1, base_accel, ws, report, next)
+        self.flying_rest(&mid, h - h1, base_accel, ws, report, next)
     }
 
     /// The rolling ball leaves the track at `s`: the flying state from the rolling kinematics
@@ -503,9 +503,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         Ok(())
     }
 
-    /// The rest `h_rest` of a step after an event at `mid`, in the mode the event left, to the
-    /// input `base_accel`; an event at its end is applied there (no further split).
-    fn flight_rest(
+    /// The rest `h_rest` of a step after an event at `mid` that left the ball flying (a
+    /// take-off, a stop hit in flight, a bounce), to the input `base_accel`; a stop or a landing
+    /// at its end is applied there (no further split). The rolling rest is
+    /// [`Self::landed_rest`]: kept apart, the static stack bound does not count a chain
+    /// (take-off, then a rolling rest) that no step can take.
+    #[inline(never)]
+    fn flying_rest(
         &self,
         mid: &State<T, D>,
         h_rest: T,
@@ -515,15 +519,31 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         end: &mut State<T, D>,
     ) -> Result<(), Error> {
         self.sub_step(mid, h_rest, base_accel, ws, report, end)?;
-        if end.contact == Contact::InFlight {
-            if let Some((side, inside, _)) = self.stop_crossing(mid, end) {
-                let impact = self.stop_in_flight(end, side, inside, ws, report)?;
-                report.impact = report.impact.or(Some(impact));
-            }
-            if self.relative(end).r > self.params.ball.path_radius() {
-                self.land(end, ws, report)?;
-            }
-        } else if S::STOPS {
+        if let Some((side, inside, _)) = self.stop_crossing(mid, end) {
+            let impact = self.stop_in_flight(end, side, inside, ws, report)?;
+            report.impact = report.impact.or(Some(impact));
+        }
+        if self.relative(end).r > self.params.ball.path_radius() {
+            self.land(end, ws, report)?;
+        }
+        Ok(())
+    }
+
+    /// The rest `h_rest` of a step after a plastic landing at `mid` (the ball rolling, between
+    /// the stops or beyond them), to the input `base_accel`; a stop reached at its end acts
+    /// there (no further split).
+    #[inline(never)]
+    fn landed_rest(
+        &self,
+        mid: &State<T, D>,
+        h_rest: T,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+        end: &mut State<T, D>,
+    ) -> Result<(), Error> {
+        self.sub_step(mid, h_rest, base_accel, ws, report, end)?;
+        if S::STOPS {
             let stop = self.params.ball.stop_angle;
             let alpha = wrap(self.relative_angle(end));
             if end.contact == Contact::Off && alpha.abs() > stop {
@@ -596,7 +616,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 report.impact = Some(impact);
             }
         }
-        self.flight_rest(&mid, h - h1, base_accel, ws, report, trial)
+        if mid.contact == Contact::InFlight {
+            self.flying_rest(&mid, h - h1, base_accel, ws, report, trial)
+        } else {
+            self.landed_rest(&mid, h - h1, base_accel, ws, report, trial)
+        }
     }
 
     /// The flight events of a step put at its end ([`crate::EventLocation::StepEnd`]): the
