@@ -17,6 +17,7 @@ SCENES = [("free", "free ball, stops, flight (`FreeBallModel<f32, 3, 13>`)"),
           ("free-flight", "free ball, stops, flight, driven at 4.10 Hz (`InFlight<FreeBallModel<f32, 3, 13>>`)"),
           ("free-modified", "free ball, stops, modified Newton (`NewtonKind::Modified`)"),
           ("free-step-end", "free ball, stops, flight, events at the step end (`EventLocation::StepEnd`)"),
+          ("free-flight-step-end", "free ball, stops, flight, events at the step end, driven at 4.10 Hz (`InFlight<StepEnd<…>>`)"),
           ("free-monitor", "free ball, stops, + monitor (`Monitor<f32>`, `record` every step)"),
           ("free-n6", "free ball, stops, N = 6 (`FreeBallModel<f32, 6, 25>`)"),
           ("beam", "beam only (`BeamModel<f32, 3, 12>`)"),
@@ -34,6 +35,7 @@ json_out = Path(sys.argv[3]) if len(sys.argv) > 3 else None
 # Scene keys of docs/embedded.json and firmware/budget.toml.
 KEYS = {"free": "free_n3_f32", "free-rolling": "free_rolling_n3_f32", "free-flight": "free_flight_n3_f32",
         "free-modified": "free_modified_n3_f32", "free-step-end": "free_step_end_n3_f32",
+        "free-flight-step-end": "free_flight_step_end_n3_f32",
         "locked": "locked_n3_f32",
         "beam": "beam_n3_f32", "free-n6": "free_n6_f32", "free-monitor": "free_monitor_n3_f32",
         "estimator": "estimator_n3_f32"}

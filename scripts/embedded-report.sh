@@ -58,7 +58,7 @@ count_calls() {
 }
 
 for profile in fw fw-size; do
-    for scene in free free-rolling free-flight free-modified free-step-end free-monitor free-n6 beam locked estimator empty; do
+    for scene in free free-rolling free-flight free-modified free-step-end free-flight-step-end free-monitor free-n6 beam locked estimator empty; do
         elf=$tdir/$target/$profile/fw-$scene
         stem=$work/$profile-$scene
         "$tdir/release/fw-$scene" >"$stem.host"

@@ -1,0 +1,22 @@
+//! `fw-free-flight-step-end`: `fw-free-step-end` driven at 4.10 Hz (`fw-free-flight`), where the
+//! ball spends much of the time in flight: the bounded worst step with many separations and
+//! landings.
+//!
+//! On `thumbv7em-none-eabihf` this is the firmware; on the host it prints the reference.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+type M = absorber_firmware::InFlight<
+    absorber_firmware::StepEnd<absorber_core::FreeBallModel<f32, 3, 13>>,
+>;
+
+#[cfg(target_os = "none")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    static mut MODEL: core::mem::MaybeUninit<M> = core::mem::MaybeUninit::uninit();
+    absorber_firmware::target::target_main::<M>(MODEL)
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    absorber_firmware::host_main::<M>()
+}
