@@ -219,6 +219,8 @@ pub struct FullSolver {
     nz: usize,
     state: FullState,
     equilibrium: FullState,
+    /// [`FullSolver::heights`] of `equilibrium` (the energies' reference, kept with it).
+    eq_heights: (f64, f64, f64),
     /// The landing of the last step (issue 13).
     last_landing: Option<Landing<f64>>,
     /// The factorization of the mass and Newton matrices (docs/full-solver.md).
@@ -245,6 +247,7 @@ impl Clone for FullSolver {
             nz: self.nz,
             state: self.state.clone(),
             equilibrium: self.equilibrium.clone(),
+            eq_heights: self.eq_heights,
             last_landing: self.last_landing,
             linear: self.linear,
             consts: Arc::clone(&self.consts),
@@ -391,7 +394,7 @@ impl FullSolver {
         let me = element.blended_mass_matrix(params.calibration.mass_lumping);
         let kb = element.bending_stiffness();
         let mass = Self::mass_factor(n, n_body, |_| &me, &bodies, Linear::Block)?;
-        Ok(Self {
+        let mut s = Self {
             params,
             scene,
             n,
@@ -404,6 +407,7 @@ impl FullSolver {
             n_body,
             nz,
             equilibrium: state.clone(),
+            eq_heights: (0.0, 0.0, 0.0),
             state,
             last_landing: None,
             linear: Linear::Block,
@@ -413,7 +417,9 @@ impl FullSolver {
                 reduced: [None, None, None],
                 projection: 0.0,
             }),
-        })
+        };
+        s.eq_heights = s.heights(&s.equilibrium);
+        Ok(s)
     }
 
     /// The solver of a real arm: `arm`'s sections (the core's
@@ -772,6 +778,22 @@ impl FullSolver {
         self.local_kin_with(mode, qi, vi, warm, theta_ref, None)
     }
 
+    /// [`FullSolver::local_kin`] without `B_d` (left zero; for callers that use only the
+    /// positions, velocities, constraints and `C_d`'s LU: the multipliers, the new state's
+    /// accelerations): the same values, 5 fewer solves.
+    fn local_kin_no_bd(
+        &self,
+        mode: Mode,
+        qi: &[f64],
+        vi: &[f64],
+        warm: &[f64; NW],
+        theta_ref: f64,
+    ) -> Result<Kin, Error> {
+        let mut kin = Kin::new(mode.m());
+        self.local_kin_into(mode, qi, vi, warm, theta_ref, None, false, &mut kin)?;
+        Ok(kin)
+    }
+
     /// [`FullSolver::local_kin`]; with `chord`, the iterations on `C = 0` use that LU of `C_d`
     /// (from a configuration close by: the finite differences of the Newton matrix) instead of
     /// refactoring at each iterate: the same root, to rounding, and `C_d` is factored once, at
@@ -786,11 +808,22 @@ impl FullSolver {
         chord: Option<&DenseLu<MC>>,
     ) -> Result<Kin, Error> {
         let mut kin = Kin::new(mode.m());
-        self.local_kin_into(mode, qi, vi, warm, theta_ref, chord, &mut kin)?;
+        self.local_kin_into(
+            mode,
+            qi,
+            vi,
+            warm,
+            theta_ref,
+            chord,
+            chord.is_none(),
+            &mut kin,
+        )?;
         Ok(kin)
     }
 
-    /// [`FullSolver::local_kin_with`] written into `out` (no copy of the result).
+    /// [`FullSolver::local_kin_with`] written into `out` (no copy of the result); `B_d` only
+    /// `with_bd` (the finite differences of the Newton matrix pass a chord and need none:
+    /// `local_residual` uses `C_d⁻ᵀ`).
     #[allow(clippy::too_many_arguments)]
     fn local_kin_into(
         &self,
@@ -800,11 +833,9 @@ impl FullSolver {
         warm: &[f64; NW],
         theta_ref: f64,
         chord: Option<&DenseLu<MC>>,
+        with_bd: bool,
         out: &mut Kin,
     ) -> Result<(), Error> {
-        // (The finite differences of the Newton matrix pass a chord and need no B_d:
-        // `local_residual` uses C_d⁻ᵀ.)
-        let with_bd = chord.is_none();
         let ind = mode.independent();
         let dep = mode.dependent();
         let m = mode.m();
@@ -1113,7 +1144,11 @@ impl FullSolver {
         let nz = self.nz;
         let ni = self.n_ind(mode);
         let loc0 = 4 * n - 4;
-        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], warm, theta_ref)?;
+        let kin = if residual {
+            self.local_kin(mode, &qi[loc0..], &vi[loc0..], warm, theta_ref)?
+        } else {
+            self.local_kin_no_bd(mode, &qi[loc0..], &vi[loc0..], warm, theta_ref)?
+        };
         *warm = kin.w;
         let m = mode.m();
         let mut jac = jac;
@@ -1147,8 +1182,14 @@ impl FullSolver {
         if self.n_body >= 6 {
             f[self.zloc(RB2) - 4] -= mb * g_eff;
         }
-        // u = M_f⁻¹ f; then the Schur complement of the local constraints (module docs).
-        if !mass.lu.solve(f) {
+        // u = M_f⁻¹ f; then the Schur complement of the local constraints (module docs). The
+        // multipliers alone need u on the local coordinates only, the tail of the block LU.
+        let solved = if residual {
+            mass.lu.solve(f)
+        } else {
+            mass.lu.solve_tail(f)
+        };
+        if !solved {
             return Err(Error::Singular);
         }
         let present = |j: usize| j < 4 || j - 4 < self.n_body;
@@ -1172,7 +1213,7 @@ impl FullSolver {
                     + kin.cons.quad[k];
             }
             let lam = small_solve(s, m, rhs).ok_or(Error::Singular)?;
-            for j in (0..NW).filter(|&j| present(j)) {
+            for j in (0..NW).filter(|&j| present(j) && residual) {
                 let gl: f64 = (0..m).map(|k| g[k][j] * lam[k]).sum();
                 if gl != 0.0 {
                     let col = &mass.cols[j * nf..(j + 1) * nf];
@@ -1294,6 +1335,7 @@ impl FullSolver {
                             &pred,
                             theta_ref,
                             Some(&kin.lu_dep),
+                            false,
                             &mut kp,
                         )?;
                         cols[side] = self.local_residual(&kp, mode, &a[..nl], g_eff)?;
@@ -1493,7 +1535,7 @@ impl FullSolver {
         contact: Contact,
     ) -> Result<FullState, Error> {
         let loc0 = 4 * self.n - 4;
-        let kin = self.local_kin(mode, &qi[loc0..], &vi[loc0..], warm, prev.theta_ref)?;
+        let kin = self.local_kin_no_bd(mode, &qi[loc0..], &vi[loc0..], warm, prev.theta_ref)?;
         let wdd = self.local_accel(&kin, mode, &ai[loc0..])?;
         let mut s = FullState {
             q: vec![0.0; self.nz],
@@ -1591,6 +1633,7 @@ impl FullSolver {
         }
         let st = self.complete(&x, &z, &z, mode, &seed, 0.0, 0.0, Contact::Off)?;
         self.equilibrium = st.clone();
+        self.eq_heights = self.heights(&st);
         self.state = st;
         Ok(iterations)
     }
@@ -2294,7 +2337,7 @@ impl Simulator for FullSolver {
             e.beam_kinetic += 0.5 * v.dot(&(self.me * v));
         }
         let now = self.heights(s);
-        let eq = self.heights(&self.equilibrium);
+        let eq = self.eq_heights;
         e.beam_potential = g * (now.0 - eq.0 + self.params.beam.mass * base_displacement);
         if self.n_body >= 3 {
             let p = &self.params.tip;
