@@ -216,25 +216,52 @@ const POW10: [f64; 23] = [
 
 /// Appends `x` exactly as `format!("{x:.9e}")` does (the exact binary value rounded to 10
 /// significant digits, `d.ddddddddde±x`), at a fraction of its cost. With `E` the decimal
-/// exponent of `|x|` and `|9 − E| ≤ 22`, `y = |x|·10^(9−E)` (or `|x| / 10^(E−9)`) is one
-/// correctly rounded operation on exact operands, so `|y − Y| ≤ ½ ulp(y) < 10⁻⁶` for the exact
-/// `Y ∈ [10⁹, 10¹⁰)`; the 10 digits are `round(Y)`, which is `round(y)` unless `Y`'s fraction
-/// is within 10⁻⁶ of ½. Values whose fraction `y − ⌊y⌋` is within 10⁻⁴ of ½ (about 2·10⁻⁴
-/// of all), `E` outside `−13..=31`, zeros, subnormals, NaN and ±∞ go through `format!`
-/// itself. Checked against `format!` in the tests.
+/// exponent of `|x|` and `|9 − E| ≤ 44`, `y = |x|·10^(9−E)` (or `|x| / 10^(E−9)`) takes one
+/// or two correctly rounded operations by exact powers of ten (`10^k`, `k ≤ 22`), so
+/// `|y − Y| ≤ ulp(y) < 2·10⁻⁶` for the exact `Y ∈ [10⁹, 10¹⁰)`; the 10 digits are
+/// `round(Y)`, which is `round(y)` unless `Y`'s fraction is within that of ½ (an error across
+/// an integer moves `⌊y⌋` and the fraction together: the same rounded integer). Values whose
+/// fraction `y − ⌊y⌋` is within 10⁻⁴ of ½ (about 2·10⁻⁴ of all), `E` outside `−35..=53` and
+/// subnormals go through `format!` itself; zeros, NaN and ±∞ are written as `format!` spells
+/// them. Checked against `format!` in the tests.
 fn push_sci10(b: &mut Vec<u8>, x: f64) {
     let fallback = |b: &mut Vec<u8>| b.extend_from_slice(format!("{x:.9e}").as_bytes());
     let a = x.abs();
-    if !x.is_finite() || a < f64::MIN_POSITIVE {
+    // `format!`'s spelling of the special values (the columns without a ball are NaN).
+    let special: Option<&[u8]> = if x.is_nan() {
+        Some(b"NaN")
+    } else if x == f64::INFINITY {
+        Some(b"inf")
+    } else if x == f64::NEG_INFINITY {
+        Some(b"-inf")
+    } else if x == 0.0 {
+        Some(if x.is_sign_negative() {
+            b"-0.000000000e0"
+        } else {
+            b"0.000000000e0"
+        })
+    } else {
+        None
+    };
+    if let Some(text) = special {
+        return b.extend_from_slice(text);
+    }
+    if a < f64::MIN_POSITIVE {
         return fallback(b);
     }
     let scaled = |e10: i32| -> Option<f64> {
         let k = 9 - e10;
-        if k >= 0 {
-            POW10.get(k as usize).map(|p| a * p)
-        } else {
-            POW10.get(k.unsigned_abs() as usize).map(|p| a / p)
-        }
+        let (big, rest) = match k.unsigned_abs() as usize {
+            j if j > 22 => (true, j - 22),
+            j => (false, j),
+        };
+        let p = *POW10.get(rest)?;
+        Some(match (k >= 0, big) {
+            (true, false) => a * p,
+            (true, true) => a * 1e22 * p,
+            (false, false) => a / p,
+            (false, true) => a / 1e22 / p,
+        })
     };
     // E is ⌊e₂ log₁₀ 2⌋ or one more (a ∈ [2^e₂, 2^(e₂+1))).
     let e2 = ((a.to_bits() >> 52) & 0x7ff) as i32 - 1023;
@@ -649,7 +676,7 @@ mod tests {
             let e = (next() % 30) as i32 - 15;
             agrees(m as f64 * 10f64.powi(e));
             agrees((1.0 - (next() % 1000) as f64 * f64::EPSILON) * 10f64.powi(e));
-            let mag = (next() % 40) as i32 - 25;
+            let mag = (next() % 100) as i32 - 45;
             let unit = (next() >> 11) as f64 / (1u64 << 53) as f64;
             agrees((unit - 0.5) * 10f64.powi(mag));
             // A midpoint of the 10th digit (11 digits ending in 5) and its neighbours.
