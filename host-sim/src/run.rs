@@ -291,16 +291,27 @@ fn push_sci10(b: &mut Vec<u8>, x: f64) {
         mant = 1_000_000_000;
         e10 += 1;
     }
+    // Sign, d.ddddddddd, e, sign, at most 2 exponent digits (|E| ≤ 54 here).
+    if e10.unsigned_abs() >= 100 {
+        return fallback(b);
+    }
     let mut out = [0u8; 17];
-    let mut k = 0;
-    if x < 0.0 {
-        out[0] = b'-';
-        k = 1;
+    let mut k = usize::from(x < 0.0);
+    out[0] = b'-';
+    // The 9 digits after the point two at a time (mant < 10¹⁰: its first digit is < 10).
+    let mut rest = mant % 1_000_000_000;
+    let mut pos = k + 10;
+    let pair = |r: u64, pos: usize, out: &mut [u8; 17]| {
+        out[pos] = b'0' + (r % 10) as u8;
+        out[pos - 1] = b'0' + (r / 10) as u8;
+    };
+    for _ in 0..4 {
+        pair(rest % 100, pos, &mut out);
+        rest /= 100;
+        pos -= 2;
     }
-    for j in (0..10).rev() {
-        out[k + if j == 0 { 0 } else { j + 1 }] = b'0' + (mant % 10) as u8;
-        mant /= 10;
-    }
+    out[k + 2] = b'0' + rest as u8;
+    out[k] = b'0' + (mant / 1_000_000_000) as u8;
     out[k + 1] = b'.';
     out[k + 11] = b'e';
     k += 12;
@@ -308,8 +319,15 @@ fn push_sci10(b: &mut Vec<u8>, x: f64) {
         out[k] = b'-';
         k += 1;
     }
+    let e = e10.unsigned_abs();
+    if e >= 10 {
+        pair(u64::from(e), k + 1, &mut out);
+        k += 2;
+    } else {
+        out[k] = b'0' + e as u8;
+        k += 1;
+    }
     b.extend_from_slice(&out[..k]);
-    push_u32(b, e10.unsigned_abs());
 }
 
 /// Steps a scene through `steps` steps, calling `sink` with the initial row and after every
