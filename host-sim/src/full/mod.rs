@@ -2344,7 +2344,10 @@ impl Simulator for FullSolver {
             let mut v = ElementVector::<f64>::from_fn(|i, _| s.v[4 * k + i]);
             v[1] += base_velocity;
             v[5] += base_velocity;
-            e.beam_kinetic += 0.5 * v.dot(&(&self.me * &v));
+            // By reference: `self.me * v` copies the 8 × 8 matrix per element and row.
+            #[allow(clippy::op_ref)]
+            let mv = &self.me * &v;
+            e.beam_kinetic += 0.5 * v.dot(&mv);
         }
         let now = self.heights(s);
         let eq = self.eq_heights;
