@@ -856,7 +856,9 @@ impl FullSolver {
         } = out;
         *w = *warm;
         *wd = [0.0; NW];
-        *bd = [[0.0; NI]; MC];
+        if with_bd {
+            *bd = [[0.0; NI]; MC];
+        }
         lu_dep.resize(m);
         for (k, &j) in ind.iter().enumerate() {
             w[j] = qi.get(k).copied().unwrap_or(0.0);
@@ -1314,11 +1316,12 @@ impl FullSolver {
             };
             if m > 0 {
                 let denom = c.c_q.abs() + c.c_v.abs() * 1e-2 + c.c_m.abs() * 1e-4;
+                // (One scratch for all columns: every field is rewritten per solve.)
+                let mut kp = Kin::new(m);
                 for k in 0..coupled {
                     let s = if k < 2 { self.params.beam.length } else { 1.0 };
                     let eps = 1e-6 * s / denom;
                     let mut cols = [[0.0; NI]; 2];
-                    let mut kp = Kin::new(m);
                     for (side, sign) in [(0usize, 1.0f64), (1, -1.0)] {
                         let (mut q, mut v, mut a) = ([0.0; NI], [0.0; NI], [0.0; NI]);
                         for (dst, src) in [(&mut q, qi), (&mut v, vi), (&mut a, ai)] {
@@ -1910,9 +1913,10 @@ impl FullSolver {
             return Err(Error::InputOutOfRange);
         }
         let h = self.params.integrator.step;
-        let start = self.state.clone();
+        // (Borrowed, not cloned: the events only read it, and it is replaced at the end.)
+        let start = &self.state;
         lock(&self.work).projection = 0.0;
-        let (trial, solved) = self.newmark(&start, h, base_accel)?;
+        let (trial, solved) = self.newmark(start, h, base_accel)?;
         let mut report = StepReport {
             iterations: solved.iterations,
             increment: solved.increment,
@@ -1922,12 +1926,12 @@ impl FullSolver {
         };
         let next = if start.contact == Contact::InFlight {
             // In flight: a landing or a stop splits the step at the crossing (flight.rs).
-            self.flight_events(&start, trial, base_accel, &mut report)?
+            self.flight_events(start, trial, base_accel, &mut report)?
         } else {
-            let next = self.stop_events(&start, trial, h, base_accel, &mut report)?;
+            let next = self.stop_events(start, trial, h, base_accel, &mut report)?;
             // Separation: a track that would pull the ball lets it fly.
             if self.flies() && report.impact.is_none() {
-                self.separation(&start, next, base_accel, &mut report)?
+                self.separation(start, next, base_accel, &mut report)?
             } else {
                 next
             }
