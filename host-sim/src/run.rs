@@ -218,9 +218,10 @@ const POW10: [f64; 23] = [
 /// significant digits, `d.ddddddddde±x`), at a fraction of its cost. With `E` the decimal
 /// exponent of `|x|` and `|9 − E| ≤ 44`, `y = |x|·10^(9−E)` (or `|x| / 10^(E−9)`) takes one
 /// or two correctly rounded operations by exact powers of ten (`10^k`, `k ≤ 22`), so
-/// `|y − Y| ≤ ulp(y) < 2·10⁻⁶` for the exact `Y ∈ [10⁹, 10¹⁰)`; the 10 digits are
-/// `round(Y)`, which is `round(y)` unless `Y`'s fraction is within that of ½ (an error across
-/// an integer moves `⌊y⌋` and the fraction together: the same rounded integer). Values whose
+/// `|y − Y| ≤ 2⁻⁵²·Y < 2.3·10⁻⁶` for the exact `Y ∈ [10⁹, 10¹⁰)` (each rounding at most
+/// 2⁻⁵³ relative); the 10 digits are `round(Y)`, which is `round(y)` unless `Y`'s fraction
+/// is within that of ½ (an error across an integer moves `⌊y⌋` and the fraction together:
+/// the same rounded integer). Values whose
 /// fraction `y − ⌊y⌋` is within 10⁻⁴ of ½ (about 2·10⁻⁴ of all), `E` outside `−35..=53` and
 /// subnormals go through `format!` itself; zeros, NaN and ±∞ are written as `format!` spells
 /// them. Checked against `format!` in the tests.
