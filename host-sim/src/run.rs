@@ -168,7 +168,7 @@ impl Row {
 
     /// The row as a CSV line (no newline): [`Row::values`], `iterations` and `impact` as
     /// integers, `contact` as 0 or 1 (or NaN), everything else with 10 significant digits in
-    /// Rust's `{:.9e}` form, byte for byte ([`push_sci10`]).
+    /// Rust's `{:.9e}` form, byte for byte (`push_sci10`, checked against `format!`).
     pub fn csv(&self) -> String {
         let mut b = Vec::with_capacity(26 * 17);
         self.write_csv(&mut b);
