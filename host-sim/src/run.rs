@@ -167,22 +167,168 @@ impl Row {
     }
 
     /// The row as a CSV line (no newline): [`Row::values`], `iterations` and `impact` as
-    /// integers, everything else with 10 significant digits.
+    /// integers, `contact` as 0 or 1 (or NaN), everything else with 10 significant digits in
+    /// Rust's `{:.9e}` form, byte for byte (`push_sci10`, checked against `format!`).
     pub fn csv(&self) -> String {
-        let mut s = String::with_capacity(26 * 17);
+        let mut b = Vec::with_capacity(26 * 17);
+        self.write_csv(&mut b);
+        // (ASCII only: the conversion cannot fail.)
+        String::from_utf8(b).unwrap_or_default()
+    }
+
+    /// [`Row::csv`] appended to `b` as ASCII bytes (no allocation when `b` has room).
+    pub fn write_csv(&self, b: &mut Vec<u8>) {
         for (i, x) in self.values().iter().enumerate() {
             if i > 0 {
-                s.push(',');
+                b.push(b',');
             }
             match i {
-                14 => s.push_str(&self.iterations.to_string()),
-                15 => s.push_str(if self.impact { "1" } else { "0" }),
-                25 if x.is_finite() => s.push_str(if *x > 0.5 { "1" } else { "0" }),
-                _ => s.push_str(&format!("{x:.9e}")),
+                14 => push_u32(b, self.iterations),
+                15 => b.push(if self.impact { b'1' } else { b'0' }),
+                25 if x.is_finite() => b.push(if *x > 0.5 { b'1' } else { b'0' }),
+                _ => push_sci10(b, *x),
             }
         }
-        s
     }
+}
+
+/// Appends `n` in decimal (as `n.to_string()`).
+fn push_u32(b: &mut Vec<u8>, n: u32) {
+    let mut buf = [0u8; 10];
+    let mut k = buf.len();
+    let mut n = n;
+    loop {
+        k -= 1;
+        buf[k] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    b.extend_from_slice(&buf[k..]);
+}
+
+/// `10^k`, k = 0..=22: exact in `f64` (`5^22 < 2^53`).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Appends `x` exactly as `format!("{x:.9e}")` does (the exact binary value rounded to 10
+/// significant digits, `d.ddddddddde±x`), at a fraction of its cost. With `E` the decimal
+/// exponent of `|x|` and `|9 − E| ≤ 44`, `y = |x|·10^(9−E)` (or `|x| / 10^(E−9)`) takes one
+/// or two correctly rounded operations by exact powers of ten (`10^k`, `k ≤ 22`), so
+/// `|y − Y| ≤ 2⁻⁵²·Y < 2.3·10⁻⁶` for the exact `Y ∈ [10⁹, 10¹⁰)` (each rounding at most
+/// 2⁻⁵³ relative); the 10 digits are `round(Y)`, which is `round(y)` unless `Y`'s fraction
+/// is within that of ½ (an error across an integer moves `⌊y⌋` and the fraction together:
+/// the same rounded integer). Values whose
+/// fraction `y − ⌊y⌋` is within 10⁻⁴ of ½ (about 2·10⁻⁴ of all), `E` outside `−35..=53` and
+/// subnormals go through `format!` itself; zeros, NaN and ±∞ are written as `format!` spells
+/// them. Checked against `format!` in the tests.
+fn push_sci10(b: &mut Vec<u8>, x: f64) {
+    let fallback = |b: &mut Vec<u8>| b.extend_from_slice(format!("{x:.9e}").as_bytes());
+    let a = x.abs();
+    // `format!`'s spelling of the special values (the columns without a ball are NaN).
+    let special: Option<&[u8]> = if x.is_nan() {
+        Some(b"NaN")
+    } else if x == f64::INFINITY {
+        Some(b"inf")
+    } else if x == f64::NEG_INFINITY {
+        Some(b"-inf")
+    } else if x == 0.0 {
+        Some(if x.is_sign_negative() {
+            b"-0.000000000e0"
+        } else {
+            b"0.000000000e0"
+        })
+    } else {
+        None
+    };
+    if let Some(text) = special {
+        return b.extend_from_slice(text);
+    }
+    if a < f64::MIN_POSITIVE {
+        return fallback(b);
+    }
+    let scaled = |e10: i32| -> Option<f64> {
+        let k = 9 - e10;
+        let (big, rest) = match k.unsigned_abs() as usize {
+            j if j > 22 => (true, j - 22),
+            j => (false, j),
+        };
+        let p = *POW10.get(rest)?;
+        Some(match (k >= 0, big) {
+            (true, false) => a * p,
+            (true, true) => a * 1e22 * p,
+            (false, false) => a / p,
+            (false, true) => a / 1e22 / p,
+        })
+    };
+    // E is ⌊e₂ log₁₀ 2⌋ or one more (a ∈ [2^e₂, 2^(e₂+1))).
+    let e2 = ((a.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+    let mut e10 = (f64::from(e2) * std::f64::consts::LOG10_2).floor() as i32;
+    let Some(mut y) = scaled(e10) else {
+        return fallback(b);
+    };
+    if y < 1e9 {
+        // (Not reached: E ≥ the estimate.)
+        return fallback(b);
+    }
+    if y >= 1e10 {
+        e10 += 1;
+        // (y may now round to just below 10⁹; round(y) below gives 10⁹ then.)
+        match scaled(e10) {
+            Some(v) => y = v,
+            None => return fallback(b),
+        }
+    }
+    let whole = y.floor();
+    let frac = y - whole;
+    if (frac - 0.5).abs() <= 1e-4 {
+        return fallback(b);
+    }
+    let mut mant = whole as u64 + u64::from(frac > 0.5);
+    if mant == 10_000_000_000 {
+        mant = 1_000_000_000;
+        e10 += 1;
+    }
+    // Sign, d.ddddddddd, e, sign, at most 2 exponent digits (|E| ≤ 54 here).
+    if e10.unsigned_abs() >= 100 {
+        return fallback(b);
+    }
+    let mut out = [0u8; 17];
+    let mut k = usize::from(x < 0.0);
+    out[0] = b'-';
+    // The 9 digits after the point two at a time (mant < 10¹⁰: its first digit is < 10).
+    let mut rest = mant % 1_000_000_000;
+    let mut pos = k + 10;
+    let pair = |r: u64, pos: usize, out: &mut [u8; 17]| {
+        out[pos] = b'0' + (r % 10) as u8;
+        out[pos - 1] = b'0' + (r / 10) as u8;
+    };
+    for _ in 0..4 {
+        pair(rest % 100, pos, &mut out);
+        rest /= 100;
+        pos -= 2;
+    }
+    out[k + 2] = b'0' + rest as u8;
+    out[k] = b'0' + (mant / 1_000_000_000) as u8;
+    out[k + 1] = b'.';
+    out[k + 11] = b'e';
+    k += 12;
+    if e10 < 0 {
+        out[k] = b'-';
+        k += 1;
+    }
+    let e = e10.unsigned_abs();
+    if e >= 10 {
+        pair(u64::from(e), k + 1, &mut out);
+        k += 2;
+    } else {
+        out[k] = b'0' + e as u8;
+        k += 1;
+    }
+    b.extend_from_slice(&out[..k]);
 }
 
 /// Steps a scene through `steps` steps, calling `sink` with the initial row and after every
@@ -512,5 +658,90 @@ pub fn half_range(rows: &[Row], from: f64, x: impl Fn(&Row) -> f64) -> f64 {
         0.5 * (hi - lo)
     } else {
         f64::NAN
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{push_sci10, push_u32};
+
+    fn agrees(x: f64) {
+        let mut s = Vec::new();
+        push_sci10(&mut s, x);
+        assert_eq!(
+            s,
+            format!("{x:.9e}").as_bytes(),
+            "bits {:#018x}",
+            x.to_bits()
+        );
+    }
+
+    /// The CSV's number format is `format!("{x:.9e}")` byte for byte: random bit patterns,
+    /// random magnitudes of the output's range, and values at and next to the midpoints of
+    /// the 10th digit (where the shortest digits are a tie), powers of ten, carries.
+    #[test]
+    fn sci10_is_std_format() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..100_000 {
+            agrees(f64::from_bits(next()));
+            // Integers and values just below a power of ten (the carry).
+            let m = next() % 100_000_000_000;
+            let e = (next() % 30) as i32 - 15;
+            agrees(m as f64 * 10f64.powi(e));
+            agrees((1.0 - (next() % 1000) as f64 * f64::EPSILON) * 10f64.powi(e));
+            let mag = (next() % 100) as i32 - 45;
+            let unit = (next() >> 11) as f64 / (1u64 << 53) as f64;
+            agrees((unit - 0.5) * 10f64.powi(mag));
+            // A midpoint of the 10th digit (11 digits ending in 5) and its neighbours.
+            let m = 10_000_000_000 + next() % 90_000_000_000;
+            let tie: f64 = format!("{}.{:010}5e{mag}", m / 10_000_000_000, m % 10_000_000_000)
+                .parse()
+                .unwrap_or(0.0);
+            for y in [tie, tie.next_up(), tie.next_down(), -tie] {
+                agrees(y);
+            }
+        }
+        for x in [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            9.9999999995,
+            9.999999999499999,
+            99_999_999_995.0,
+            1e-300,
+            f64::MIN_POSITIVE,
+            f64::MIN_POSITIVE / 3.0,
+            f64::MAX,
+            f64::MIN,
+            f64::EPSILON,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ] {
+            agrees(x);
+        }
+        for e in -320..=308 {
+            let p: f64 = format!("1e{e}").parse().unwrap_or(0.0);
+            for y in [p, p.next_up(), p.next_down()] {
+                agrees(y);
+            }
+        }
+    }
+
+    #[test]
+    fn u32_is_to_string() {
+        for n in [0, 1, 9, 10, 99, 100, 12_345, u32::MAX] {
+            let mut s = Vec::new();
+            push_u32(&mut s, n);
+            assert_eq!(s, n.to_string().as_bytes());
+        }
     }
 }

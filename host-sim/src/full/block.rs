@@ -333,8 +333,19 @@ impl BlockLu {
 
     /// Solves `A x = b` in place with the last factors; false if there are none, `b` has the
     /// wrong length or the result is not finite.
-    #[allow(clippy::needless_range_loop)] // fixed 4 × 4 arithmetic, by index
     pub fn solve(&self, b: &mut [f64]) -> bool {
+        self.solve_part(b, true)
+    }
+
+    /// [`BlockLu::solve`] for the tail's unknowns only (end node and border, the last
+    /// `n − 4(nodes − 1)` entries of `b`, the same values bit for bit: the back substitution,
+    /// which does not change them, is skipped); the other entries are left intermediate.
+    pub fn solve_tail(&self, b: &mut [f64]) -> bool {
+        self.solve_part(b, false)
+    }
+
+    #[allow(clippy::needless_range_loop)] // fixed 4 × 4 arithmetic, by index
+    fn solve_part(&self, b: &mut [f64], back_substitution: bool) -> bool {
         let Some(tail_lu) = self.tail_lu.as_ref().filter(|_| self.factored) else {
             return false;
         };
@@ -380,6 +391,9 @@ impl BlockLu {
         tail_lu.solve(&mut z);
         for (bi, zi) in tail.iter_mut().zip(z.iter()) {
             *bi = *zi;
+        }
+        if !back_substitution {
+            return tail.iter().all(|x| x.is_finite());
         }
         // Back: x_k = Ũ_k⁻¹ (y_k − H_k x_{k+1}).
         let mut next = [z[0], z[1], z[2], z[3]];
@@ -786,6 +800,16 @@ impl Matrix {
             None => false,
         }
     }
+
+    /// [`Matrix::solve`] where only the tail's unknowns (end node and border) are wanted:
+    /// [`BlockLu::solve_tail`] (the same values), a whole solve with the sparse factors.
+    pub fn solve_tail(&mut self, b: &mut [f64]) -> bool {
+        match self.factored {
+            Some(false) => self.block.solve_tail(b),
+            Some(true) => self.sparse.as_mut().is_some_and(|lu| lu.solve(b)),
+            None => false,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -843,6 +867,11 @@ mod tests {
                 assert_eq!(a.fallbacks(), 0);
                 let mut y = b.as_slice().to_vec();
                 assert!(a.solve(&mut y));
+                // The tail-only solve: the same tail, bit for bit.
+                let mut t = b.as_slice().to_vec();
+                assert!(a.solve_tail(&mut t));
+                let t0 = 4 * (nodes - 1);
+                assert_eq!(t[t0..], y[t0..], "{nodes} {border} {linear:?}");
                 for i in 0..n {
                     assert!(
                         (y[i] - xd[i]).abs() <= 1e-12 * xd.amax(),
