@@ -175,7 +175,8 @@ fn flight_keeps_the_clock_and_the_ball_inside_the_housing() {
 /// With every event at the end of its step (`EventLocation::StepEnd`) the same invariants
 /// hold, and the landings do not chatter: deciding the bounce on the normal speed at the step's
 /// end (after the ball was pressed on through the rest of the step) once gave 3,002 bounces in
-/// 60 s at 4.13 Hz where the crossing gives 91; deciding on the crossing's speed, the step-end
+/// 60 s at 4.13 Hz where the crossing gives 91 (and this run, with the end's speed in place of
+/// the crossing's, 4,679 landings against 723); deciding on the crossing's speed, the step-end
 /// run has no more landings than 1.5 times the crossing run's (the free ball is chaotic here,
 /// so the counts are compared, not the paths): Newmark 701 vs 723, generalized-α (ρ∞ = 0.8)
 /// 993 vs 1,115.
