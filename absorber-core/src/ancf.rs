@@ -393,6 +393,19 @@ mod tests {
         }
     }
 
+    /// The kept quadrature's energy is the element's (same points and weights, the weight
+    /// folded into one product: rounding only) at a stretched, bent state and at rest.
+    #[test]
+    fn quadrature_energy_equals_element_energy() {
+        let e = el();
+        let q = e.axial_quadrature();
+        let u =
+            ElementVector::from_column_slice(&[0.0, 0.0, 0.01, -0.05, 1e-4, -0.02, -0.003, -0.1]);
+        let (a, b) = (q.energy(&u), e.axial_energy(&u));
+        assert!(b > 0.0 && (a - b).abs() <= 1e-14 * b, "{a} vs {b}");
+        assert_eq!(q.energy(&ElementVector::zeros()), 0.0);
+    }
+
     /// The force is the gradient of the energy.
     #[test]
     fn axial_force_is_gradient_of_energy() {
@@ -501,6 +514,17 @@ impl<T: Real> AxialQuadrature<T> {
             }
         }
         f
+    }
+
+    /// Axial strain energy `Σ_p ½ (EA l ω_p) ε_p²` \[J\]: [`Element::axial_energy`] from the
+    /// kept shape-function derivatives (the same quadrature).
+    pub fn energy(&self, u: &ElementVector<T>) -> T {
+        let mut e = T::zero();
+        for (sx, w) in self.sx.iter().zip(self.weight.iter()) {
+            let (_, _, eps) = Self::strain(sx, u);
+            e += lit::<T>(0.5) * *w * eps * eps;
+        }
+        e
     }
 
     /// Axial force `Q_l` and the 2×2 blocks of its tangent `K_l`: `blocks[i][j] = (xx, xy, yy)`
