@@ -264,9 +264,12 @@ fn push_sci10(b: &mut Vec<u8>, x: f64) {
             (false, true) => a / 1e22 / p,
         })
     };
-    // E is ⌊e₂ log₁₀ 2⌋ or one more (a ∈ [2^e₂, 2^(e₂+1))).
+    // E is ⌊e₂ log₁₀ 2⌋ or one more (a ∈ [2^e₂, 2^(e₂+1))). The floor in integers,
+    // log₁₀ 2 ≈ 78913 / 2¹⁸ with an arithmetic shift: equal to the floating-point floor for
+    // every normal exponent (test `log10_floor_in_integers`), without a libm call on a target
+    // without SSE4.1.
     let e2 = ((a.to_bits() >> 52) & 0x7ff) as i32 - 1023;
-    let mut e10 = (f64::from(e2) * std::f64::consts::LOG10_2).floor() as i32;
+    let mut e10 = (e2 * 78_913) >> 18;
     let Some(mut y) = scaled(e10) else {
         return fallback(b);
     };
@@ -282,12 +285,13 @@ fn push_sci10(b: &mut Vec<u8>, x: f64) {
             None => return fallback(b),
         }
     }
-    let whole = y.floor();
-    let frac = y - whole;
+    // ⌊y⌋ by truncation (y ∈ [10⁹, 10¹⁰) is positive; exact, no libm `floor`).
+    let whole = y as u64;
+    let frac = y - whole as f64;
     if (frac - 0.5).abs() <= 1e-4 {
         return fallback(b);
     }
-    let mut mant = whole as u64 + u64::from(frac > 0.5);
+    let mut mant = whole + u64::from(frac > 0.5);
     if mant == 10_000_000_000 {
         mant = 1_000_000_000;
         e10 += 1;
@@ -674,6 +678,16 @@ mod tests {
             "bits {:#018x}",
             x.to_bits()
         );
+    }
+
+    /// `push_sci10`'s decimal exponent estimate in integers equals the floating-point floor
+    /// of `e₂ log₁₀ 2` for every normal binary exponent.
+    #[test]
+    fn log10_floor_in_integers() {
+        for e2 in -1022i32..=1023 {
+            let exact = (f64::from(e2) * std::f64::consts::LOG10_2).floor() as i32;
+            assert_eq!((e2 * 78_913) >> 18, exact, "e2 = {e2}");
+        }
     }
 
     /// The CSV's number format is `format!("{x:.9e}")` byte for byte: random bit patterns,
