@@ -304,6 +304,10 @@ impl ElementConst {
     }
 }
 
+/// A constraint correction this small (scaled, as the 1e-13 convergence test) is rounding: the
+/// dependent positions it would correct are a root of `C = 0` already (a few ulps of 1).
+const ROOT_TO_ROUNDING: f64 = 4.0 * f64::EPSILON;
+
 /// A zero vector of length `n` from the allocator's thread cache: `vec![0.0; n]` asks
 /// `calloc`, which glibc serves without that cache (≈ 400 instructions per vector of a step).
 fn zeros(n: usize) -> Vec<f64> {
@@ -911,11 +915,18 @@ impl FullSolver {
             }
             let mut inc: f64 = 0.0;
             for (d, &j) in dx.iter().zip(dep.iter()) {
-                w[j] += d;
                 inc = inc.max(d.abs() / self.bodies.scale(j));
             }
             if !inc.is_finite() {
                 return Err(Error::NonFiniteState);
+            }
+            if chord.is_none() && inc <= ROOT_TO_ROUNDING {
+                // w is a root to rounding, and the values, gradients and LU in hand are its
+                // own: stop here rather than apply the correction and evaluate once more.
+                break;
+            }
+            for (d, &j) in dx.iter().zip(dep.iter()) {
+                w[j] += d;
             }
             converged = inc <= 1e-13;
             last = inc;
