@@ -11,8 +11,8 @@ use host_sim::full::{FullSolver, SceneKind};
 /// (`|c − A| ≤ ρ (1 + 1e-9)`; measured: ρ to 12 digits, after a bounce), on the track after a step without a
 /// landing or a stop impact the track does not pull (`contact_forces`' N ≥ 0: the force the
 /// separation test reads at every step's end, so no budget), and the
-/// position constraints hold to rounding (1e-12). Measured at 4.10 Hz, N = 3: 245 separations,
-/// 714 landings, 39 % of the steps in flight.
+/// position constraints hold to rounding (1e-12). Measured at 4.10 Hz, N = 3: 249 separations,
+/// 718 landings, 39 % of the steps in flight.
 #[test]
 fn long_flights_keep_the_ball_inside_and_the_track_pushing() {
     for (f0, n, min_separations) in [(4.10, 3usize, 100), (4.13, 3, 20), (4.10, 8, 20)] {
