@@ -1683,7 +1683,6 @@ impl FullSolver {
         if self.scene.has_ball() {
             s.theta_ref = self.bodies.orbit(&kin.w, &kin.wd, prev.theta_ref).0;
         }
-        // (One slice at a time: a chained iterator checks entry by entry, 8× the cost.)
         let finite = |x: &[f64]| x.iter().all(|z| z.is_finite());
         if !(finite(&s.q) && finite(&s.v) && finite(&s.a)) {
             return Err(Error::NonFiniteState);
