@@ -597,6 +597,26 @@ pub fn run<M: Sim, W: Write, P: Probe>(m: &mut M, out: &mut W, probe: &mut P) ->
     s
 }
 
+/// The `main` of a firmware bin that runs the scene type `$m` ([`Sim`]): on the target the
+/// cortex-m-rt entry with the model in a static (`target::target_main`), on the host
+/// [`host_main`], which prints the reference the target must reproduce bit for bit.
+#[macro_export]
+macro_rules! firmware_main {
+    ($m:ty) => {
+        #[cfg(target_os = "none")]
+        #[cortex_m_rt::entry]
+        fn main() -> ! {
+            static mut MODEL: core::mem::MaybeUninit<$m> = core::mem::MaybeUninit::uninit();
+            $crate::target::target_main::<$m>(MODEL)
+        }
+
+        #[cfg(not(target_os = "none"))]
+        fn main() {
+            $crate::host_main::<$m>()
+        }
+    };
+}
+
 /// Host side: runs the scene and prints the reference (the firmware must print the same).
 #[cfg(not(target_os = "none"))]
 pub fn host_main<M: Sim>() {

@@ -5,14 +5,4 @@
 
 type M = absorber_firmware::Empty;
 
-#[cfg(target_os = "none")]
-#[cortex_m_rt::entry]
-fn main() -> ! {
-    static mut MODEL: core::mem::MaybeUninit<M> = core::mem::MaybeUninit::uninit();
-    absorber_firmware::target::target_main::<M>(MODEL)
-}
-
-#[cfg(not(target_os = "none"))]
-fn main() {
-    absorber_firmware::host_main::<M>()
-}
+absorber_firmware::firmware_main!(M);

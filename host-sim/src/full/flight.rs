@@ -129,17 +129,24 @@ impl FullSolver {
     }
 
     /// The track's normal force on a rolling ball for the separation test \[N\]; zero in
-    /// flight. From the ball's own equation of motion with the state's accelerations (the
-    /// integrator's, `R̈_b` from the acceleration constraints): the track's force on the ball is
-    /// `m_b (R̈_b + g_eff ŷ)`, and its inward component `N = −m_b n·(R̈_b + g_eff ŷ)`,
-    /// `n = (R_b − A)/|R_b − A|` — the core's formula `m_b [−ẍ_A sin θ + (ÿ_A + g_eff) cos θ +
-    /// ρ θ̇²]` written in maximal coordinates. (The multiplier λ₄ of [`Self::contact_forces`]
-    /// is the same force from the exact dynamics at (q, q̇); it differs from this by the Newton
-    /// residual of the step, which moved the separation by 2e-4 of a step against the core.)
+    /// flight: the first of [`Self::track_force`].
     pub(super) fn normal_force(&self, s: &FullState) -> Result<f64, Error> {
         if s.contact == Contact::InFlight {
             return Ok(0.0);
         }
+        Ok(self.track_force(s)?.0)
+    }
+
+    /// The track's force on a ball on the track, `(N, F_t)` \[N\], from the ball's own equation
+    /// of motion with the state's accelerations (the integrator's, `R̈_b` from the acceleration
+    /// constraints): the force on the ball is `F = m_b (R̈_b + g_eff ŷ)`, its inward component
+    /// `N = −n·F` and its component along increasing θ `F_t = t·F`, with
+    /// `n = (R_b − A)/|R_b − A|`, `t = (−n_y, n_x)` — the core's formulas `m_b [−ẍ_A sin θ +
+    /// (ÿ_A + g_eff) cos θ + ρ θ̇²]` and `m_b [ẍ_A cos θ + (ÿ_A + g_eff) sin θ + ρ θ̈]` written in
+    /// maximal coordinates. The multipliers of the augmented system
+    /// ([`Self::contact_forces_from_multipliers`]) are the same force from the exact dynamics
+    /// at (q, q̇); they differ from this by the Newton residual of the step.
+    pub(super) fn track_force(&self, s: &FullState) -> Result<(f64, f64), Error> {
         let rel = self.relative(s);
         if !positive(rel.r) {
             return Err(Error::NonFiniteState);
@@ -149,7 +156,10 @@ impl FullSolver {
             self.bodies.weights.1 * s.a[i1],
             self.bodies.weights.1 * (s.a[i2] + self.effective_gravity(s.base_accel)),
         ];
-        Ok(-(rel.d[0] * force[0] + rel.d[1] * force[1]) / rel.r)
+        Ok((
+            -(rel.d[0] * force[0] + rel.d[1] * force[1]) / rel.r,
+            (rel.d[0] * force[1] - rel.d[1] * force[0]) / rel.r,
+        ))
     }
 
     /// Relative angles of two states on one branch: `α₀` wrapped to `(−π, π]` and `α₁` the

@@ -286,6 +286,23 @@ fn kron4(m: &ElementMatrix<f64>) -> Option<[[f64; 4]; 4]> {
 
 type Block4 = [[f64; 4]; 4];
 
+/// `(B ⊗ I₂) x` for an element's 8 coordinates (`x` of length 8; nodes' `(x, y)` pairs)
+/// without the zero entries of the Kronecker form: entry `2p + d` is `Σ_q B[p][q] x[2q + d]`,
+/// summed in `q` order (the element mass and bending matrices are `M₄ ⊗ I₂`, `K₄ ⊗ I₂`).
+fn kron_i2(b: &Block4, x: &[f64]) -> [f64; 8] {
+    let mut r = [0.0; 8];
+    for (rp, row) in r.chunks_exact_mut(2).zip(b.iter()) {
+        for (d, rd) in rp.iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for (c, xq) in row.iter().zip(x.chunks_exact(2)) {
+                acc += c * xq[d];
+            }
+            *rd = acc;
+        }
+    }
+    r
+}
+
 /// Constants of one element's assembly: the axial quadrature, and `(M₄, K₄)` when the mass
 /// and bending matrices are `M₄ ⊗ I₂`, `K₄ ⊗ I₂` exactly (then the Newton block is built in
 /// that form, the same sums: [`absorber_core::ancf::AxialQuadrature::tangent_block`]).
@@ -795,7 +812,9 @@ impl FullSolver {
         warm: &[f64; NW],
         theta_ref: f64,
     ) -> Result<Kin, Error> {
-        self.local_kin_with(mode, qi, vi, warm, theta_ref, None)
+        let mut kin = Kin::new(mode.m());
+        self.local_kin_into(mode, qi, vi, warm, theta_ref, None, true, &mut kin)?;
+        Ok(kin)
     }
 
     /// [`FullSolver::local_kin`] without `B_d` (left zero; for callers that use only the
@@ -814,36 +833,12 @@ impl FullSolver {
         Ok(kin)
     }
 
-    /// [`FullSolver::local_kin`]; with `chord`, the iterations on `C = 0` use that LU of `C_d`
-    /// (from a configuration close by: the finite differences of the Newton matrix) instead of
-    /// refactoring at each iterate: the same root, to rounding, and `C_d` is factored once, at
-    /// the converged positions.
-    fn local_kin_with(
-        &self,
-        mode: Mode,
-        qi: &[f64],
-        vi: &[f64],
-        warm: &[f64; NW],
-        theta_ref: f64,
-        chord: Option<&DenseLu<MC>>,
-    ) -> Result<Kin, Error> {
-        let mut kin = Kin::new(mode.m());
-        self.local_kin_into(
-            mode,
-            qi,
-            vi,
-            warm,
-            theta_ref,
-            chord,
-            chord.is_none(),
-            &mut kin,
-        )?;
-        Ok(kin)
-    }
-
-    /// [`FullSolver::local_kin_with`] written into `out` (no copy of the result); `B_d` only
+    /// [`FullSolver::local_kin`] written into `out` (no copy of the result); `B_d` only
     /// `with_bd` (the finite differences of the Newton matrix pass a chord and need none:
-    /// `local_residual` uses `C_d⁻ᵀ`).
+    /// `local_residual` uses `C_d⁻ᵀ`). With `chord`, the iterations on `C = 0` use that LU of
+    /// `C_d` (from a configuration close by: the finite differences) instead of refactoring at
+    /// each iterate: the same root, to rounding, and `C_d` is factored once, at the converged
+    /// positions.
     #[allow(clippy::too_many_arguments)]
     fn local_kin_into(
         &self,
@@ -1110,20 +1105,7 @@ impl FullSolver {
             let uc = u + ud * damp;
             let kbu = match &ec.kron {
                 // K_t (u + c u̇) without the zero entries of K₄ ⊗ I₂ (the same sums).
-                Some((_, k4)) => {
-                    let ucs: [f64; 8] = uc.into();
-                    let mut r = [0.0; 8];
-                    for (rp, kr) in r.chunks_exact_mut(2).zip(k4.iter()) {
-                        for (d, rd) in rp.iter_mut().enumerate() {
-                            let mut acc = 0.0;
-                            for (k, uq) in kr.iter().zip(ucs.chunks_exact(2)) {
-                                acc += k * uq[d];
-                            }
-                            *rd = acc;
-                        }
-                    }
-                    ElementVector::<f64>::from(r)
-                }
+                Some((_, k4)) => ElementVector::<f64>::from(kron_i2(k4, uc.as_slice())),
                 None => kb * uc,
             };
             let fe = applied - kbu - ql;
@@ -1285,14 +1267,9 @@ impl FullSolver {
             match &self.element_const(e).kron {
                 // The same sums without the zero entries of M₄ ⊗ I₂ (exactly the same values).
                 Some((m4, _)) => {
-                    for (p, mr) in m4.iter().enumerate() {
-                        for d in 0..2 {
-                            let mut s = 0.0;
-                            for (q, m) in mr.iter().enumerate() {
-                                s += m * ye[2 * q + d];
-                            }
-                            my[4 * e + 2 * p + d] += s;
-                        }
+                    let mye = &mut my[4 * e..4 * e + 8];
+                    for (m, r) in mye.iter_mut().zip(kron_i2(m4, ye)) {
+                        *m += r;
                     }
                 }
                 None => {
@@ -1982,15 +1959,10 @@ impl FullSolver {
 
     /// The track's force on the ball at the current state, `(N, F_t)` \[N\] (normal along the
     /// inward normal, tangential along increasing θ: `absorber_core::ContactForces`), from the
-    /// ball's own equation of motion with the state's accelerations (the integrator's; the
-    /// ball's `R̈_b` from the acceleration constraints): the track's force on the ball is
-    /// `F = m_b (R̈_b + g_eff ŷ)`, `N = −n·F` and `F_t = t·F` with `n = (R_b − A)/|R_b − A|`,
-    /// `t = (−n_y, n_x)`. For a ball resting on a stop `F_t` includes the stop's push, as the
-    /// multipliers' `−λ₅ − λ₆/ρ` does. The same force as the separation test's
-    /// ([`FullSolver::normal_force`]); the multipliers of the augmented system
-    /// ([`FullSolver::contact_forces_from_multipliers`]) are the same force from the exact
-    /// dynamics at (q, q̇) and differ from it by the step's Newton residual. `None` without a
-    /// free ball.
+    /// ball's own equation of motion with the state's accelerations
+    /// (`track_force`, flight.rs): the force the separation test reads. For a ball resting
+    /// on a stop `F_t` includes the stop's push, as the multipliers' `−λ₅ − λ₆/ρ` does. `(0, 0)`
+    /// in flight, `None` without a free ball.
     pub fn contact_forces(&self) -> Option<(f64, f64)> {
         if !self.scene.free_ball() {
             return None;
@@ -1999,15 +1971,7 @@ impl FullSolver {
         if s.contact == Contact::InFlight {
             return Some((0.0, 0.0));
         }
-        let rel = self.relative(s);
-        let (i1, i2) = (self.zloc(RB1), self.zloc(RB2));
-        let mb = self.bodies.weights.1;
-        let f = [
-            mb * s.a[i1],
-            mb * (s.a[i2] + self.effective_gravity(s.base_accel)),
-        ];
-        let n = [rel.d[0] / rel.r, rel.d[1] / rel.r];
-        Some((-(n[0] * f[0] + n[1] * f[1]), n[0] * f[1] - n[1] * f[0]))
+        self.track_force(s).ok()
     }
 
     /// The track's force on the ball at the current state as [`FullSolver::contact_forces`],
@@ -2480,15 +2444,8 @@ impl Simulator for FullSolver {
                 // ½ uᵀ (K₄ ⊗ I₂) u and ½ vᵀ (M₄ ⊗ I₂) v without the zero entries.
                 Some((m4, k4)) => {
                     let quadratic = |b: &Block4, x: &ElementVector<f64>| {
-                        let mut acc = 0.0;
-                        for (p, row) in b.iter().enumerate() {
-                            for d in 0..2 {
-                                let bx: f64 =
-                                    row.iter().enumerate().map(|(q, c)| c * x[2 * q + d]).sum();
-                                acc += x[2 * p + d] * bx;
-                            }
-                        }
-                        0.5 * acc
+                        let bx = kron_i2(b, x.as_slice());
+                        0.5 * x.iter().zip(bx).map(|(x, y)| x * y).sum::<f64>()
                     };
                     e.beam_strain += quadratic(k4, &u);
                     e.beam_kinetic += quadratic(m4, &v);
