@@ -53,16 +53,17 @@ struct Log2 {
 impl Log for Log2 {
     fn log(&self, status: Status, category: &str, message: &str) {
         if let Some(cb) = self.logger {
-            let (c, m) = (c_string(category), c_string(message));
-            // SAFETY: the importer's logger with its environment; "%s" and one C string: the
-            // message is never read as a format.
+            // The message is the format string (as importers that do not format expect), its
+            // `%` doubled for those that do.
+            let (c, m) = (c_string(category), c_string(&message.replace('%', "%%")));
+            // SAFETY: the importer's logger with its environment and C strings that outlive
+            // the call; the format has no conversion, so no variadic argument is read.
             unsafe {
                 cb(
                     self.environment,
                     self.name.as_ptr(),
                     status as i32,
                     c.as_ptr(),
-                    c"%s".as_ptr(),
                     m.as_ptr(),
                 )
             };

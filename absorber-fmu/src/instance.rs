@@ -731,6 +731,27 @@ mod tests {
         }
     }
 
+    /// A tip load switches the model to the loaded scene in mid-run without a jump: 200 steps
+    /// without, 300 with a tip load give the core's loaded model fed the same loads bit for bit.
+    #[test]
+    fn tip_load_continues_the_plain_run_bit_for_bit() {
+        use absorber_core::{FreeBall, Loaded, Loads, Model};
+        let w = 2.0 * std::f64::consts::PI * 4.13;
+        let accel = |k: usize| -0.5e-3 * w * w * (w * k as f64 * 0.003).sin();
+        let load = |k: usize| if k > 200 { 0.05 * (0.7 * k as f64 * 0.003).sin() } else { 0.0 };
+        let mut i = started(Kind::Free, false);
+        let mut m =
+            Model::<f64, Loaded<FreeBall>, 3, 13>::at_rest(Params::default(), 0.0).expect("model");
+        for k in 1..=500 {
+            i.set_f64(&[1, 2], &[accel(k), load(k)]);
+            let t = i.time();
+            assert_eq!(i.do_step(t, 0.003).0, Status::Ok);
+            m.step_with_loads(accel(k), &Loads::uniform(load(k), 0.0))
+                .expect("step");
+            assert_eq!(tip(&mut i).to_bits(), m.tip_deflection().to_bits(), "step {k}");
+        }
+    }
+
     /// A communication step that is not k·h is refused with `Discard` and a message, and
     /// nothing happens; 3h runs three steps.
     #[test]

@@ -34,6 +34,13 @@ pub const BUILD_ID: &str = env!("ABSORBER_FMU_BUILD_ID");
 /// library it packages, so that a library of other sources is never packaged).
 pub const BUILD_MARKER: &str = concat!("absorber-fmu-build:", env!("ABSORBER_FMU_BUILD_ID"));
 
+/// [`BUILD_MARKER`] as a C string: exported, so that the library file always holds it.
+#[no_mangle]
+pub extern "C" fn absorber_fmu_build_marker() -> *const std::ffi::c_char {
+    const MARKER: &str = concat!("absorber-fmu-build:", env!("ABSORBER_FMU_BUILD_ID"), "\0");
+    MARKER.as_ptr().cast()
+}
+
 /// Helpers of the C functions.
 pub(crate) mod ffi {
     use crate::instance::Status;
