@@ -25,7 +25,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 python3 -m venv "$work/venv"
 py=$work/venv/bin/python
-"$py" -m pip install -q --disable-pip-version-check ./python pytest
+"$py" -m pip install -q --disable-pip-version-check ./python pytest "dask[distributed]"
 # The README's promise, printed beside the CLI's last CSV row.
 "$py" -c "import absorber; print('python: last tip_deflection', absorber.run('paper')['tip_deflection'][-1])"
 ABSORBER_CLI=$CARGO_TARGET_DIR/release/host-sim "$py" -m pytest -q -p no:cacheprovider python/tests

@@ -20,6 +20,7 @@ pub mod core_sim;
 pub mod estimate;
 pub mod excitation;
 pub mod fatigue;
+pub mod fleet;
 pub mod fft;
 pub mod figures;
 pub mod identify;
