@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The Python package on a fresh virtual environment: builds the wheel from python/ (pip runs
-# maturin, which builds the pyo3 extension with cargo), installs it with pytest into a new venv,
-# and runs python/tests against the command line (host-sim, built here in release).
+# maturin, which builds the pyo3 extension with cargo), installs it with pytest and Dask into a
+# new venv, and runs python/tests against the command line (host-sim, built here in release); the
+# fleet test runs a small study on a two-worker Dask LocalCluster.
 #
 # Usage: scripts/python-test.sh      (from anywhere; honours CARGO_TARGET_DIR; needs python3 ≥ 3.10
 # with venv and network access to the Python package index, as `pip install` does)

@@ -658,7 +658,9 @@ mod tests {
     use absorber_core::monitor::DetailCategory;
     use std::sync::{Arc, Mutex};
 
-    struct Capture(Arc<Mutex<Vec<(Status, String)>>>);
+    type Messages = Arc<Mutex<Vec<(Status, String)>>>;
+
+    struct Capture(Messages);
     impl Log for Capture {
         fn log(&self, status: Status, _: &str, message: &str) {
             if let Ok(mut v) = self.0.lock() {
@@ -667,7 +669,7 @@ mod tests {
         }
     }
 
-    fn instance(kind: Kind, single: bool) -> (Instance, Arc<Mutex<Vec<(Status, String)>>>) {
+    fn instance(kind: Kind, single: bool) -> (Instance, Messages) {
         let log = Arc::new(Mutex::new(Vec::new()));
         let c = Config {
             name: "t".into(),
@@ -738,7 +740,13 @@ mod tests {
         use absorber_core::{FreeBall, Loaded, Loads, Model};
         let w = 2.0 * std::f64::consts::PI * 4.13;
         let accel = |k: usize| -0.5e-3 * w * w * (w * k as f64 * 0.003).sin();
-        let load = |k: usize| if k > 200 { 0.05 * (0.7 * k as f64 * 0.003).sin() } else { 0.0 };
+        let load = |k: usize| {
+            if k > 200 {
+                0.05 * (0.7 * k as f64 * 0.003).sin()
+            } else {
+                0.0
+            }
+        };
         let mut i = started(Kind::Free, false);
         let mut m =
             Model::<f64, Loaded<FreeBall>, 3, 13>::at_rest(Params::default(), 0.0).expect("model");
@@ -748,7 +756,11 @@ mod tests {
             assert_eq!(i.do_step(t, 0.003).0, Status::Ok);
             m.step_with_loads(accel(k), &Loads::uniform(load(k), 0.0))
                 .expect("step");
-            assert_eq!(tip(&mut i).to_bits(), m.tip_deflection().to_bits(), "step {k}");
+            assert_eq!(
+                tip(&mut i).to_bits(),
+                m.tip_deflection().to_bits(),
+                "step {k}"
+            );
         }
     }
 
@@ -818,10 +830,10 @@ mod tests {
         };
         let first = run(&mut a);
         let (mut b, _) = instance(Kind::Free, true);
-        let back = b.deserialize(&bytes).ok().expect("deserializes");
+        let back = b.deserialize(&bytes).expect("deserializes");
         b.restore(&back);
         assert_eq!(run(&mut b), first);
-        let back = a.deserialize(&bytes).ok().expect("deserializes");
+        let back = a.deserialize(&bytes).expect("deserializes");
         a.restore(&back);
         assert_eq!(run(&mut a), first);
         bytes[0] ^= 1;

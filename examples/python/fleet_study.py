@@ -13,7 +13,8 @@ from the heads at lock-in, truck gusts. Each record draws its climate (assumptio
 here and in docs/fleet.md): the mean wind speed from a Weibull distribution (shape 2, scale
 5 m/s at the arm's height: mean 4.4 m/s), the turbulence intensity lognormal about 0.2,
 vortex shedding in one to three episodes when the mean speed lies within ±15 % of the
-lock-in speed St·U/D = f1, trucks as a Poisson stream of 30 per hour, and its own turbulence
+lock-in speed St·U/D = f1 and the turbulence intensity is at most 0.15 (lock-in needs a steady
+flow), trucks as a Poisson stream of 30 per hour, and its own turbulence
 realization (the seed). The absorber: a 10 kg steel ball in a circular track tuned to half the
 arm's first frequency, in a 15 kg housing at the arm's end (`host-sim tune` says such a track,
 about 1.35 m wide, does not fit in a signal head: this study says what it would buy).
@@ -48,6 +49,7 @@ WEIBULL_SCALE = 5.0  # [m/s] at the arm's height
 TURBULENCE_MEDIAN = 0.2
 TURBULENCE_LOG_SD = 0.25
 LOCK_IN_BAND = 0.15
+LOCK_IN_TURBULENCE = 0.15  # vortices lock in only in a steady, low-turbulence flow
 TRUCKS_PER_HOUR = 30.0
 #: The absorber (assumptions).
 BALL_MASS = 10.0  # [kg], steel
@@ -100,7 +102,7 @@ def record_scene(scene: dict, u_lock: float, seed: int, index: int, duration: fl
             x.update(mean_speed=u, turbulence_intensity=ti)
             loads.append(x)
         elif x["type"] == "vortex-shedding":
-            if abs(u / u_lock - 1.0) <= LOCK_IN_BAND:
+            if abs(u / u_lock - 1.0) <= LOCK_IN_BAND and ti <= LOCK_IN_TURBULENCE:
                 episodes = []
                 for _ in range(int(rng.integers(1, 4))):
                     start = float(rng.uniform(0.0, duration))

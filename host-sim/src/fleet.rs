@@ -136,10 +136,9 @@ fn core(e: absorber_core::Error) -> anyhow::Error {
 /// scene key.
 fn setup(scene: &Scene, absorber: Absorber) -> Result<(Params<f64>, ArmParams<f64>)> {
     let f = &scene.file;
-    let arm_file = f
-        .arm
-        .as_ref()
-        .ok_or_else(|| anyhow!("a fleet record needs a scene with an `[arm]` (e.g. scenes/mast-arm.toml)"))?;
+    let arm_file = f.arm.as_ref().ok_or_else(|| {
+        anyhow!("a fleet record needs a scene with an `[arm]` (e.g. scenes/mast-arm.toml)")
+    })?;
     if f.kind != crate::scene::Kind::Beam {
         bail!("invalid value for `kind`: a fleet record's scene is the bare arm (`kind = \"beam\"`); choose the absorber with `absorber`");
     }
@@ -226,7 +225,9 @@ pub fn record(
         (F64, Absorber::None, 6) => go!(f64, BeamOnly, 6, 24),
         (F64, Absorber::Locked, 6) => go!(f64, LockedBall, 6, 24),
         (F64, Absorber::Free, 6) => go!(f64, FreeBall, 6, 25),
-        (_, _, n) => bail!("invalid value for `elements`: {n} (a fleet record runs 3 or 6 elements)"),
+        (_, _, n) => {
+            bail!("invalid value for `elements`: {n} (a fleet record runs 3 or 6 elements)")
+        }
     }
 }
 
@@ -275,8 +276,9 @@ impl Run {
             stress_per_curvature: lit(s.stress_per_curvature),
             extreme_fibre: lit(s.extreme_fibre),
         };
-        let stress =
-            |m: &Model<T, Arm<S>, N, D>| to_f64(section.stress_of_moment(section.root_moment(m, MomentEstimate::Reaction)));
+        let stress = |m: &Model<T, Arm<S>, N, D>| {
+            to_f64(section.stress_of_moment(section.root_moment(m, MomentEstimate::Reaction)))
+        };
         let static_tip = to_f64(model.static_tip_deflection());
         let static_stress = stress(&model);
         let mut damage = StressDamage::<f64, 512>::new(self.category).map_err(core)?;
@@ -289,7 +291,13 @@ impl Run {
         );
         let h = self.params.integrator.step;
         let mut loads = Loads::<T, N>::zero();
-        let (mut sum, mut sum2, mut peak) = (0.0, 0.0, 0.0f64);
+        let (mut sum, mut sum2, mut peak, mut max_range) = (0.0, 0.0, 0.0f64, 0.0f64);
+        let count = |c: &Cycle<f64>, histogram: &mut [u64], max_range: &mut f64| {
+            if let Some(b) = histogram.get_mut(bin_of(c.range)) {
+                *b += c.halves();
+            }
+            *max_range = max_range.max(c.range);
+        };
         for k in 0..=self.steps {
             if k > 0 {
                 let t = k as f64 * h;
@@ -298,17 +306,18 @@ impl Run {
                 for (d, q) in loads.line_load.iter_mut().zip(&line) {
                     *d = lit(*q);
                 }
-                model
-                    .step_with_loads(T::zero(), &loads)
-                    .map_err(|e| anyhow!("step {k} (t = {t:.2} s) failed: {}", crate::scene::physical_failure(e, scene)))?;
+                model.step_with_loads(T::zero(), &loads).map_err(|e| {
+                    anyhow!(
+                        "step {k} (t = {t:.2} s) failed: {}",
+                        crate::scene::physical_failure(e, scene)
+                    )
+                })?;
             }
             let x = stress(&model);
             let y = to_f64(model.tip_deflection());
             damage
                 .push(x, &mut |c: &Cycle<f64>| {
-                    if let Some(b) = histogram.get_mut(bin_of(c.range)) {
-                        *b += c.halves();
-                    }
+                    count(c, &mut histogram, &mut max_range)
                 })
                 .map_err(|e| anyhow!("root stress at step {k}: {e}"))?;
             sum += x;
@@ -320,27 +329,18 @@ impl Run {
                 tip.push(y);
             }
         }
-        damage.rainflow().residue(&mut |c: Cycle<f64>| {
-            if let Some(b) = histogram.get_mut(bin_of(c.range)) {
-                *b += c.halves();
-            }
-        });
+        damage
+            .rainflow()
+            .residue(&mut |c: Cycle<f64>| count(&c, &mut histogram, &mut max_range));
         let (extended, cutoff) = damage.damage();
         let n = (self.steps + 1) as f64;
         let mean = sum / n;
-        let mut max_range = 0.0f64;
-        damage.rainflow().residue(&mut |c: Cycle<f64>| max_range = max_range.max(c.range));
         Ok(RecordResult {
             duration: self.steps as f64 * h,
             steps: self.steps,
             damage: cutoff,
             damage_extended: extended,
-            max_range: max_range.max(
-                histogram
-                    .iter()
-                    .rposition(|c| *c > 0)
-                    .map_or(0.0, |b| b as f64 * RANGE_BIN),
-            ),
+            max_range,
             histogram,
             stress_rms: (sum2 / n - mean * mean).max(0.0).sqrt(),
             tip_peak: peak,
@@ -357,8 +357,11 @@ mod tests {
     use super::*;
 
     fn mast_arm() -> Scene {
-        let mut s = Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/mast-arm.toml"))
-            .expect("scene");
+        let mut s = Scene::load(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scenes/mast-arm.toml"
+        ))
+        .expect("scene");
         s.file.sensor = None;
         s
     }
@@ -380,8 +383,10 @@ mod tests {
         let mut d = StressDamage::<f64, 512>::new(category.expect("detail")).expect("counter");
         let mut hist = vec![0u64; RANGE_BINS];
         for x in &a.root_stress {
-            d.push(*x, &mut |cy: &Cycle<f64>| hist[bin_of(cy.range)] += cy.halves())
-                .expect("finite");
+            d.push(*x, &mut |cy: &Cycle<f64>| {
+                hist[bin_of(cy.range)] += cy.halves()
+            })
+            .expect("finite");
         }
         d.rainflow()
             .residue(&mut |cy: Cycle<f64>| hist[bin_of(cy.range)] += cy.halves());
@@ -401,6 +406,10 @@ mod tests {
         let mut t = s.clone();
         t.file.elements = 4;
         assert!(e(record(&t, 1, 1.0, Absorber::None, 1)).contains("`elements`"));
-        assert!(Absorber::from_name("big").err().map(|e| e.to_string()).unwrap_or_default().contains("`absorber`"));
+        assert!(Absorber::from_name("big")
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+            .contains("`absorber`"));
     }
 }

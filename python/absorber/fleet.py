@@ -148,7 +148,8 @@ class DamageTally:
     def per_year(self, extended: bool = False, z: float = 1.96) -> Tuple[float, float, float]:
         """Damage per year [1/year] and its confidence interval ``(mean, low, high)``: the
         records are samples of the arm's climate (equal durations), the mean damage per record
-        scaled to a year, ± ``z`` standard errors (1.96: 95 %, normal approximation)."""
+        scaled to a year, ± ``z`` standard errors (1.96: 95 %, normal approximation of the
+        mean; the low end at least 0)."""
         if self.records == 0 or self.seconds == 0:
             return (math.nan, math.nan, math.nan)
         n = self.records
@@ -157,7 +158,7 @@ class DamageTally:
         var = (s2 - n * mean * mean) / (n - 1) if n > 1 else Fraction(0)
         scale = SECONDS_PER_YEAR / float(self.seconds / n)
         half = z * math.sqrt(max(float(var), 0.0) / n)
-        return (float(mean) * scale, (float(mean) - half) * scale, (float(mean) + half) * scale)
+        return (float(mean) * scale, max(float(mean) - half, 0.0) * scale, (float(mean) + half) * scale)
 
     def cycles(self) -> float:
         """Stress cycles counted (half cycles count ½)."""

@@ -62,9 +62,7 @@ pub fn fleet_frequencies<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let s = scene_of(scene)?;
     let a = Absorber::from_name(absorber).map_err(to_py)?;
-    let f = py
-        .detach(|| fleet::frequencies(&s, a))
-        .map_err(to_py)?;
+    let f = py.detach(|| fleet::frequencies(&s, a)).map_err(to_py)?;
     Ok(PyArray1::from_vec(py, f))
 }
 

@@ -83,8 +83,12 @@ fn library(given: Option<&Path>) -> Result<(PathBuf, Vec<u8>)> {
     let marker = absorber_fmu::BUILD_MARKER.as_bytes();
     let has_marker = |bytes: &[u8]| bytes.windows(marker.len()).any(|w| w == marker);
     if let Some(p) = given {
-        let bytes = std::fs::read(p)
-            .with_context(|| format!("invalid value for `--library`: cannot read `{}`", p.display()))?;
+        let bytes = std::fs::read(p).with_context(|| {
+            format!(
+                "invalid value for `--library`: cannot read `{}`",
+                p.display()
+            )
+        })?;
         if !has_marker(&bytes) {
             bail!(
                 "invalid value for `--library`: `{}` is not the absorber-fmu library of this host-sim's sources (rebuild both: cargo build --release -p host-sim)",
