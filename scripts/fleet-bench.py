@@ -7,7 +7,9 @@ round runs, in turn, the serial loop (one process, no Dask), a LocalCluster of o
 one of two workers (threads_per_worker = 1; clusters started and warmed before the clock
 starts). The machine is shared, so the configurations are interleaved within every round and
 the figures are medians over rounds of per-round (paired) ratios. Also the per-task overhead
-of Dask (tasks of one step each) and the projected wall time of 10^6 simulated hours.
+of Dask (tasks of one step each), the CPU time the work took (this process, or the workers'
+processes: what contention from other jobs does not inflate) and the projected wall time of
+10^6 simulated hours.
 
 Usage: python scripts/fleet-bench.py [--records 16] [--rounds 5] [--json docs/fleet.json]
 (needs the absorber package and dask[distributed]; prints a markdown table).
@@ -57,24 +59,33 @@ def main():
         cl.gather(cl.map(fleet.record_tally, *zip(*tiny[: 2 * n]), pure=False))  # warm the workers
         clusters[n] = (c, cl)
 
-    def serial(w):
-        t = time.perf_counter()
+    cpu = {"serial": [], "dask1": [], "dask2": []}
+
+    def serial(w, key=None):
+        t, c = time.perf_counter(), time.process_time()
         r = [fleet.record_tally(*x) for x in w]
+        if key:
+            cpu[key].append(time.process_time() - c)
         return time.perf_counter() - t, r
 
-    def dask(n, w):
+    def dask(n, w, key=None):
         cl = clusters[n][1]
+        c0 = cl.run(time.process_time)
         t = time.perf_counter()
         r = cl.gather(cl.map(fleet.record_tally, *zip(*w), pure=False))
-        return time.perf_counter() - t, r
+        wall = time.perf_counter() - t
+        c1 = cl.run(time.process_time)
+        if key:
+            cpu[key].append(sum(c1[k] - c0[k] for k in c1))
+        return wall, r
 
     rounds = []
     load0 = os.getloadavg()
     for k in range(a.rounds):
         row = {}
-        row["serial"], ref = serial(work)
-        row["dask1"], r1 = dask(1, work)
-        row["dask2"], r2 = dask(2, work)
+        row["serial"], ref = serial(work, "serial")
+        row["dask1"], r1 = dask(1, work, "dask1")
+        row["dask2"], r2 = dask(2, work, "dask2")
         if not (r1 == ref and r2 == ref):
             sys.exit("FAILED: Dask results differ from the serial ones")
         row["tiny_serial"], _ = serial(tiny)
@@ -97,6 +108,7 @@ def main():
     scaling = med(lambda r: r["dask1"] / r["dask2"])
     overhead = med(lambda r: (r["tiny_dask1"] - r["tiny_serial"]) / len(tiny))
     record_s = med(lambda r: r["serial"] / len(work))
+    cpu_rate = {k: statistics.median(hours / (c / 3600.0) for c in v) for k, v in cpu.items()}
     core_hours = 1e6 / per_core["dask2"]
     out = {
         "records_per_round": len(work),
@@ -104,6 +116,8 @@ def main():
         "rounds": rounds,
         "load_average_before_after": [load0, load1],
         "simulated_hours_per_core_hour": per_core,
+        "simulated_hours_per_cpu_hour": cpu_rate,
+        "cpu_seconds": cpu,
         "dask_one_worker_over_serial": worker_vs_serial,
         "dask_two_workers_per_worker_over_serial": worker2_vs_serial,
         "scaling_one_to_two_workers": scaling,
@@ -119,6 +133,8 @@ def main():
     print(f"| serial wall time per record (median) | {record_s:.3f} s |")
     print(f"| simulated hours per core-hour: serial / Dask 1 worker / Dask 2 workers | {per_core['serial']:.0f} / {per_core['dask1']:.0f} / {per_core['dask2']:.0f} |")
     print(f"| Dask throughput per worker over serial (1 worker; 2 workers) | {worker_vs_serial:.3f}; {worker2_vs_serial:.3f} |")
+    print(f"| simulated hours per CPU-hour (CPU time of the process, of the workers): serial / Dask 1 worker / Dask 2 workers | {cpu_rate['serial']:.0f} / {cpu_rate['dask1']:.0f} / {cpu_rate['dask2']:.0f} |")
+    print(f"| … per-worker CPU efficiency over serial (1 worker; 2 workers) | {cpu_rate['dask1'] / cpu_rate['serial']:.3f}; {cpu_rate['dask2'] / cpu_rate['serial']:.3f} |")
     print(f"| scaling from 1 to 2 workers | {scaling:.3f}× |")
     print(f"| Dask overhead per task (one-step tasks, 1 worker minus serial) | {1e3 * overhead:.2f} ms |")
     print(f"| 10⁶ simulated hours: core-hours (2-worker rate) | {core_hours:.0f} |")
