@@ -27,8 +27,10 @@ if ((${#missing[@]})); then
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-# host-sim and, as its dependency, the FMU's cdylib; the C API's static library for the host.
-cargo build -q --release -p host-sim -p absorber-ffi
+# host-sim and, as its dependency, the FMU's cdylib (built with the same packages as
+# scripts/python-test.sh, so that CI builds them once); the C API's static library for the host.
+cargo build -q --release -p host-sim -p absorber-python
+cargo build -q --release -p absorber-ffi
 hs=$CARGO_TARGET_DIR/release/host-sim
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

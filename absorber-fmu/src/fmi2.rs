@@ -3,8 +3,8 @@
 //! the types this FMU does not use answer `fmi2Error` with a log message.
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
-use crate::ffi::{c_string, guard, load_config, slice, slice_mut, string};
-use crate::instance::{Instance, Log, Snapshot, Status};
+use crate::ffi::{self as state, c_string, guard, load_config, slice, slice_mut, string};
+use crate::instance::{Instance, Log, Status};
 use std::ffi::{c_char, c_void};
 use std::path::PathBuf;
 
@@ -382,35 +382,14 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
     c: Fmi2Component,
     FMUstate: *mut Fmi2FmuState,
 ) -> Fmi2Status {
-    // SAFETY: `FMUstate` valid; its value NULL or a state of this library.
-    unsafe {
-        with(c, |x| {
-            let Some(slot) = FMUstate.as_mut() else {
-                return x
-                    .instance
-                    .say(Status::Error, "fmi2GetFMUstate: NULL FMUstate");
-            };
-            let s = x.instance.snapshot();
-            match slot.cast::<Snapshot>().as_mut() {
-                Some(old) => *old = s,
-                None => *slot = Box::into_raw(Box::new(s)).cast(),
-            }
-            Status::Ok
-        })
-    }
+    // SAFETY: the importer's pointers (FMI contract).
+    unsafe { with(c, |x| state::get_state(&x.instance, FMUstate)) }
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: Fmi2Component, FMUstate: Fmi2FmuState) -> Fmi2Status {
-    // SAFETY: a state made by this library.
-    unsafe {
-        with(c, |x| match FMUstate.cast::<Snapshot>().as_ref() {
-            Some(s) => x.instance.restore(s),
-            None => x
-                .instance
-                .say(Status::Error, "fmi2SetFMUstate: NULL FMUstate"),
-        })
-    }
+    // SAFETY: the importer's pointers (FMI contract).
+    unsafe { with(c, |x| state::set_state(&mut x.instance, FMUstate)) }
 }
 
 #[no_mangle]
@@ -418,19 +397,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: Fmi2Component,
     FMUstate: *mut Fmi2FmuState,
 ) -> Fmi2Status {
-    // SAFETY: `FMUstate` NULL or valid; its value NULL or a state of this library, not used
-    // after this call.
-    unsafe {
-        with(c, |_| {
-            if let Some(slot) = FMUstate.as_mut() {
-                if !slot.is_null() {
-                    drop(Box::from_raw(slot.cast::<Snapshot>()));
-                }
-                *slot = std::ptr::null_mut();
-            }
-            Status::Ok
-        })
-    }
+    // SAFETY: the importer's pointers (FMI contract).
+    unsafe { with(c, |_| state::free_state(FMUstate)) }
 }
 
 #[no_mangle]
@@ -439,20 +407,8 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     FMUstate: Fmi2FmuState,
     size: *mut usize,
 ) -> Fmi2Status {
-    // SAFETY: a state of this library; `size` valid for a write.
-    unsafe {
-        with(c, |x| {
-            match (FMUstate.cast::<Snapshot>().as_ref(), size.as_mut()) {
-                (Some(s), Some(n)) => {
-                    *n = x.instance.serialized_size(s);
-                    Status::Ok
-                }
-                _ => x
-                    .instance
-                    .say(Status::Error, "fmi2SerializedFMUstateSize: NULL argument"),
-            }
-        })
-    }
+    // SAFETY: the importer's pointers (FMI contract).
+    unsafe { with(c, |x| state::state_size(&x.instance, FMUstate, size)) }
 }
 
 #[no_mangle]
@@ -462,18 +418,10 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     serializedState: *mut u8,
     size: usize,
 ) -> Fmi2Status {
-    // SAFETY: a state of this library; `serializedState` valid for `size` writes.
+    // SAFETY: the importer's pointers (FMI contract).
     unsafe {
         with(c, |x| {
-            match (
-                FMUstate.cast::<Snapshot>().as_ref(),
-                slice_mut(serializedState, size),
-            ) {
-                (Some(s), Some(out)) => x.instance.serialize(s, out),
-                _ => x
-                    .instance
-                    .say(Status::Error, "fmi2SerializeFMUstate: NULL argument"),
-            }
+            state::serialize(&x.instance, FMUstate, serializedState, size)
         })
     }
 }
@@ -485,25 +433,10 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     FMUstate: *mut Fmi2FmuState,
 ) -> Fmi2Status {
-    // SAFETY: `serializedState` valid for `size` reads; `FMUstate` valid for a write.
+    // SAFETY: the importer's pointers (FMI contract).
     unsafe {
         with(c, |x| {
-            let (Some(bytes), Some(slot)) = (slice(serializedState, size), FMUstate.as_mut())
-            else {
-                return x
-                    .instance
-                    .say(Status::Error, "fmi2DeSerializeFMUstate: NULL argument");
-            };
-            match x.instance.deserialize(bytes) {
-                Ok(s) => {
-                    if !slot.is_null() {
-                        drop(Box::from_raw(slot.cast::<Snapshot>()));
-                    }
-                    *slot = Box::into_raw(Box::new(s)).cast();
-                    Status::Ok
-                }
-                Err(e) => e,
-            }
+            state::deserialize(&x.instance, serializedState, size, FMUstate)
         })
     }
 }

@@ -4,8 +4,8 @@
 //! answer `fmi3Error` with a log message.
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
-use crate::ffi::{c_string, guard, load_config, slice, slice_mut, string};
-use crate::instance::{Instance, Log, Snapshot, Status};
+use crate::ffi::{self as state, c_string, guard, load_config, slice, slice_mut, string};
+use crate::instance::{Instance, Log, Status};
 use std::ffi::{c_char, c_void};
 use std::path::PathBuf;
 
@@ -283,20 +283,8 @@ pub unsafe extern "C" fn fmi3GetFMUState(
     instance: Fmi3Instance,
     FMUState: *mut Fmi3FmuState,
 ) -> Fmi3Status {
-    // SAFETY: `FMUState` valid for reads and writes; its value NULL or a state of this library.
-    unsafe {
-        with(instance, |i| {
-            let Some(slot) = FMUState.as_mut() else {
-                return i.say(Status::Error, "fmi3GetFMUState: NULL FMUState");
-            };
-            let s = i.snapshot();
-            match slot.cast::<Snapshot>().as_mut() {
-                Some(old) => *old = s,
-                None => *slot = Box::into_raw(Box::new(s)).cast(),
-            }
-            Status::Ok
-        })
-    }
+    // SAFETY: the importer's pointers (FMI contract).
+    unsafe { with(instance, |i| state::get_state(i, FMUState)) }
 }
 
 #[no_mangle]
@@ -304,13 +292,8 @@ pub unsafe extern "C" fn fmi3SetFMUState(
     instance: Fmi3Instance,
     FMUState: Fmi3FmuState,
 ) -> Fmi3Status {
-    // SAFETY: a state made by `fmi3GetFMUState`/`fmi3DeserializeFMUState` of this library.
-    unsafe {
-        with(instance, |i| match FMUState.cast::<Snapshot>().as_ref() {
-            Some(s) => i.restore(s),
-            None => i.say(Status::Error, "fmi3SetFMUState: NULL FMUState"),
-        })
-    }
+    // SAFETY: the importer's pointers (FMI contract).
+    unsafe { with(instance, |i| state::set_state(i, FMUState)) }
 }
 
 #[no_mangle]
@@ -318,19 +301,8 @@ pub unsafe extern "C" fn fmi3FreeFMUState(
     instance: Fmi3Instance,
     FMUState: *mut Fmi3FmuState,
 ) -> Fmi3Status {
-    // SAFETY: `FMUState` NULL or valid; its value NULL or a state of this library, not used
-    // after this call.
-    unsafe {
-        with(instance, |_| {
-            if let Some(slot) = FMUState.as_mut() {
-                if !slot.is_null() {
-                    drop(Box::from_raw(slot.cast::<Snapshot>()));
-                }
-                *slot = std::ptr::null_mut();
-            }
-            Status::Ok
-        })
-    }
+    // SAFETY: the importer's pointers (FMI contract).
+    unsafe { with(instance, |_| state::free_state(FMUState)) }
 }
 
 #[no_mangle]
@@ -339,18 +311,8 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     FMUState: Fmi3FmuState,
     size: *mut usize,
 ) -> Fmi3Status {
-    // SAFETY: a state of this library; `size` valid for a write.
-    unsafe {
-        with(instance, |i| {
-            match (FMUState.cast::<Snapshot>().as_ref(), size.as_mut()) {
-                (Some(s), Some(n)) => {
-                    *n = i.serialized_size(s);
-                    Status::Ok
-                }
-                _ => i.say(Status::Error, "fmi3SerializedFMUStateSize: NULL argument"),
-            }
-        })
-    }
+    // SAFETY: the importer's pointers (FMI contract).
+    unsafe { with(instance, |i| state::state_size(i, FMUState, size)) }
 }
 
 #[no_mangle]
@@ -360,16 +322,10 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     serializedState: *mut u8,
     size: usize,
 ) -> Fmi3Status {
-    // SAFETY: a state of this library; `serializedState` valid for `size` writes.
+    // SAFETY: the importer's pointers (FMI contract).
     unsafe {
         with(instance, |i| {
-            match (
-                FMUState.cast::<Snapshot>().as_ref(),
-                slice_mut(serializedState, size),
-            ) {
-                (Some(s), Some(out)) => i.serialize(s, out),
-                _ => i.say(Status::Error, "fmi3SerializeFMUState: NULL argument"),
-            }
+            state::serialize(i, FMUState, serializedState, size)
         })
     }
 }
@@ -381,20 +337,10 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     FMUState: *mut Fmi3FmuState,
 ) -> Fmi3Status {
-    // SAFETY: `serializedState` valid for `size` reads; `FMUState` valid for a write.
+    // SAFETY: the importer's pointers (FMI contract).
     unsafe {
         with(instance, |i| {
-            let (Some(bytes), Some(slot)) = (slice(serializedState, size), FMUState.as_mut())
-            else {
-                return i.say(Status::Error, "fmi3DeserializeFMUState: NULL argument");
-            };
-            match i.deserialize(bytes) {
-                Ok(s) => {
-                    *slot = Box::into_raw(Box::new(s)).cast();
-                    Status::Ok
-                }
-                Err(e) => e,
-            }
+            state::deserialize(i, serializedState, size, FMUState)
         })
     }
 }

@@ -43,8 +43,8 @@ pub extern "C" fn absorber_fmu_build_marker() -> *const std::ffi::c_char {
 
 /// Helpers of the C functions.
 pub(crate) mod ffi {
-    use crate::instance::Status;
-    use std::ffi::{c_char, CStr};
+    use crate::instance::{Instance, Snapshot, Status};
+    use std::ffi::{c_char, c_void, CStr};
 
     /// `n` elements at `p` (an empty slice for `n = 0`, whatever `p`); `None` for a NULL `p`.
     ///
@@ -97,6 +97,108 @@ pub(crate) mod ffi {
     /// A C string of `s` (interior NULs replaced).
     pub fn c_string(s: &str) -> std::ffi::CString {
         std::ffi::CString::new(s.replace('\0', " ")).unwrap_or_default()
+    }
+
+    /// `fmi*GetFMUState`: a new state in `*slot`, or the old one there overwritten.
+    ///
+    /// # Safety
+    /// `slot` is NULL or valid for reads and writes; its value NULL or a state of this library.
+    pub unsafe fn get_state(i: &Instance, slot: *mut *mut c_void) -> Status {
+        // SAFETY: by the caller's guarantee.
+        let Some(slot) = (unsafe { slot.as_mut() }) else {
+            return i.say(Status::Error, "get FMU state: NULL argument");
+        };
+        let s = i.snapshot();
+        // SAFETY: a non-NULL value is a state of this library.
+        match unsafe { slot.cast::<Snapshot>().as_mut() } {
+            Some(old) => *old = s,
+            None => *slot = Box::into_raw(Box::new(s)).cast(),
+        }
+        Status::Ok
+    }
+
+    /// `fmi*SetFMUState`.
+    ///
+    /// # Safety
+    /// `state` is NULL or a state of this library.
+    pub unsafe fn set_state(i: &mut Instance, state: *mut c_void) -> Status {
+        // SAFETY: by the caller's guarantee.
+        match unsafe { state.cast::<Snapshot>().as_ref() } {
+            Some(s) => i.restore(s),
+            None => i.say(Status::Error, "set FMU state: NULL state"),
+        }
+    }
+
+    /// `fmi*FreeFMUState`: frees `*slot` and sets it to NULL.
+    ///
+    /// # Safety
+    /// `slot` is NULL or valid; its value NULL or a state of this library, not used after.
+    pub unsafe fn free_state(slot: *mut *mut c_void) -> Status {
+        // SAFETY: by the caller's guarantee.
+        if let Some(slot) = unsafe { slot.as_mut() } {
+            if !slot.is_null() {
+                // SAFETY: a state of this library, made by `Box::into_raw`.
+                drop(unsafe { Box::from_raw(slot.cast::<Snapshot>()) });
+            }
+            *slot = std::ptr::null_mut();
+        }
+        Status::Ok
+    }
+
+    /// `fmi*SerializedFMUStateSize`.
+    ///
+    /// # Safety
+    /// `state` NULL or a state of this library; `size` NULL or valid for a write.
+    pub unsafe fn state_size(i: &Instance, state: *mut c_void, size: *mut usize) -> Status {
+        // SAFETY: by the caller's guarantee.
+        match unsafe { (state.cast::<Snapshot>().as_ref(), size.as_mut()) } {
+            (Some(s), Some(n)) => {
+                *n = i.serialized_size(s);
+                Status::Ok
+            }
+            _ => i.say(Status::Error, "serialized FMU state size: NULL argument"),
+        }
+    }
+
+    /// `fmi*SerializeFMUState`.
+    ///
+    /// # Safety
+    /// `state` NULL or a state of this library; `out` NULL or valid for `size` writes.
+    pub unsafe fn serialize(i: &Instance, state: *mut c_void, out: *mut u8, size: usize) -> Status {
+        // SAFETY: by the caller's guarantee.
+        match unsafe { (state.cast::<Snapshot>().as_ref(), slice_mut(out, size)) } {
+            (Some(s), Some(out)) => i.serialize(s, out),
+            _ => i.say(Status::Error, "serialize FMU state: NULL argument"),
+        }
+    }
+
+    /// `fmi*DeserializeFMUState`: a new state in `*slot` (one already there is overwritten).
+    ///
+    /// # Safety
+    /// `bytes` NULL or valid for `size` reads; `slot` NULL or valid for reads and writes, its
+    /// value NULL or a state of this library.
+    pub unsafe fn deserialize(
+        i: &Instance,
+        bytes: *const u8,
+        size: usize,
+        slot: *mut *mut c_void,
+    ) -> Status {
+        // SAFETY: by the caller's guarantee.
+        let (Some(bytes), Some(slot)) = (unsafe { slice(bytes, size) }, unsafe { slot.as_mut() })
+        else {
+            return i.say(Status::Error, "deserialize FMU state: NULL argument");
+        };
+        match i.deserialize(bytes) {
+            Ok(s) => {
+                // SAFETY: a non-NULL value is a state of this library.
+                match unsafe { slot.cast::<Snapshot>().as_mut() } {
+                    Some(old) => *old = s,
+                    None => *slot = Box::into_raw(Box::new(s)).cast(),
+                }
+                Status::Ok
+            }
+            Err(e) => e,
+        }
     }
 
     /// The configuration in the FMU's resource folder `dir`.
