@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The Python package on a fresh virtual environment: builds the wheel from python/ (pip runs
-# maturin, which builds the pyo3 extension with cargo), installs it with pytest into a new venv,
-# and runs python/tests against the command line (host-sim, built here in release).
+# maturin, which builds the pyo3 extension with cargo), installs it with pytest and Dask into a
+# new venv, and runs python/tests against the command line (host-sim, built here in release); the
+# fleet test runs a small study on a two-worker Dask LocalCluster.
 #
 # Usage: scripts/python-test.sh      (from anywhere; honours CARGO_TARGET_DIR; needs python3 ≥ 3.10
 # with venv and network access to the Python package index, as `pip install` does)
@@ -25,7 +26,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 python3 -m venv "$work/venv"
 py=$work/venv/bin/python
-"$py" -m pip install -q --disable-pip-version-check ./python pytest
+"$py" -m pip install -q --disable-pip-version-check ./python pytest "dask[distributed]"
 # The README's promise, printed beside the CLI's last CSV row.
 "$py" -c "import absorber; print('python: last tip_deflection', absorber.run('paper')['tip_deflection'][-1])"
 ABSORBER_CLI=$CARGO_TARGET_DIR/release/host-sim "$py" -m pytest -q -p no:cacheprovider python/tests

@@ -99,6 +99,10 @@ pub enum Command {
     /// histograms; with `--out`, writes `estimate.csv`, `estimate_stress.png`,
     /// `estimate_histogram.png` and `estimate.json`.
     Estimate(EstimateArgs),
+    /// Packages the reduced model of a scene as an FMI 3.0 or 2.0 co-simulation FMU (inputs:
+    /// base acceleration, tip load; outputs: tip deflection and acceleration, root stress,
+    /// ball angle, contact, normal force, Miner damage; fixed step h; docs/fmu.md).
+    Fmu(crate::commands::FmuArgs),
 }
 
 /// `estimate`.

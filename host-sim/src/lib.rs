@@ -22,6 +22,7 @@ pub mod excitation;
 pub mod fatigue;
 pub mod fft;
 pub mod figures;
+pub mod fleet;
 pub mod identify;
 pub mod integrator;
 pub mod output;

@@ -7,6 +7,8 @@
 //! typed, documented API is `absorber/__init__.py`; errors become `absorber.AbsorberError`
 //! (a `ValueError`) with the offending field in its `field` attribute.
 
+mod fleet;
+
 use host_sim::cli::SceneArgs;
 use host_sim::commands;
 use host_sim::scene::Scene;
@@ -273,5 +275,6 @@ fn _absorber(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(modes, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
     m.add_function(wrap_pyfunction!(scene_toml, m)?)?;
+    fleet::register(m)?;
     Ok(())
 }

@@ -6,10 +6,12 @@ mod calibrate;
 mod docs;
 mod estimate;
 mod fatigue;
+pub mod fmu;
 mod info;
 mod run;
 mod sweep;
 
+pub use fmu::FmuArgs;
 pub use info::{lowest_frequencies, static_summary};
 pub use run::run_in_memory;
 pub use sweep::sweep_in_memory;
@@ -42,6 +44,7 @@ pub fn dispatch(cli: Cli) -> Result<()> {
         Command::Identify(a) => calibrate::identify(&a),
         Command::Validation(a) => docs::validation(&a),
         Command::Estimate(a) => estimate::run(&a),
+        Command::Fmu(a) => fmu::run(&a),
     }
 }
 
