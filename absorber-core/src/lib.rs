@@ -63,10 +63,10 @@ pub use energy::Energies;
 pub use error::Error;
 pub use flight::{Flight, Landing};
 pub use loads::{ArmParams, Loads, PointMass};
-pub use model::{Contact, Impact, Model, Side, State, StepReport};
+pub use model::{Contact, Impact, Model, Outcome, Side, State, StepReport, RESTART_AFTER};
 pub use outputs::ContactForces;
 pub use params::{
-    BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,
+    AtCap, BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,
     NewtonKind, Params, TipParams,
 };
 pub use scalar::Real;

@@ -49,7 +49,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             Contact::Off => {
                 let alpha = self.relative_angle(next);
                 if alpha.abs() > self.params.ball.stop_angle {
-                    if self.events_at_step_end() {
+                    if self.event_at_end(ws) {
                         let side = Side::of(alpha);
                         self.impact_at_end(start, next, side, true, ws, report)?;
                     } else {
@@ -62,7 +62,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             Contact::Beyond if S::FLIGHT => {
                 let (a0, a1) = self.branch_angles(start, next);
                 if a1.abs() < self.params.ball.stop_angle {
-                    if self.events_at_step_end() {
+                    if self.event_at_end(ws) {
                         let side = Side::of(a0);
                         self.impact_at_end(start, next, side, false, ws, report)?;
                     } else {
