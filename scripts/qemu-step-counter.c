@@ -12,9 +12,10 @@
  *   gcc -O2 -shared -fPIC -o step-counter.so scripts/qemu-step-counter.c
  *   qemu-system-arm ... -plugin ./step-counter.so,entry=0x1234,ret=0x5678,out=counts.txt
  *
- * With `op=<entry>/<ret>/<ret>…` (up to 8 times: the operations), each line also carries, per
- * operation in the order given, the calls made during that outer call and the instructions
- * executed inside them (entry to return address, callees included): `<total> <calls> <insns> …`.
+ * With `op=<entry>/<ret>/<ret>…` (up to 16 times: the operations), each line also carries, per
+ * operation in the order given, the calls made during that outer call, the instructions executed
+ * inside them (entry to return address, callees included) and the most in one of those calls:
+ * `<total> <calls> <insns> <most> …`.
  * Operations do not nest (an operation entered while another runs counts towards the first).
  *
  * Written against the QEMU plugin API version 1 (QEMU 6.x-8.1, e.g. Debian 12's QEMU 7.2).
@@ -53,11 +54,11 @@ struct block {
 #define MAX_RET 64
 static struct block *blocks;
 
-#define MAX_OPS 8
+#define MAX_OPS 16
 struct op {
     uint64_t entry, ret[MAX_RET];
     int n_ret;
-    uint64_t calls, insns;
+    uint64_t calls, insns, cur, maxcall;
 };
 static struct op ops[MAX_OPS];
 static int n_ops, active_op = -1;
@@ -76,6 +77,9 @@ static void on_exec(unsigned int vcpu, void *udata)
         struct op *o = &ops[active_op];
         for (int i = 0; i < o->n_ret; i++) {
             if (b->pc == o->ret[i]) {
+                if (o->cur > o->maxcall) {
+                    o->maxcall = o->cur;
+                }
                 active_op = -1;
                 break;
             }
@@ -86,8 +90,9 @@ static void on_exec(unsigned int vcpu, void *udata)
             if (b->pc == ret[i]) {
                 fprintf(out, "%" PRIu64, current);
                 for (int k = 0; k < n_ops; k++) {
-                    fprintf(out, " %" PRIu64 " %" PRIu64, ops[k].calls, ops[k].insns);
-                    ops[k].calls = ops[k].insns = 0;
+                    fprintf(out, " %" PRIu64 " %" PRIu64 " %" PRIu64, ops[k].calls, ops[k].insns,
+                            ops[k].maxcall);
+                    ops[k].calls = ops[k].insns = ops[k].maxcall = 0;
                 }
                 fprintf(out, "\n");
                 active_op = -1;
@@ -106,6 +111,7 @@ static void on_exec(unsigned int vcpu, void *udata)
             if (b->pc == ops[k].entry) {
                 active_op = k;
                 ops[k].calls++;
+                ops[k].cur = 0;
                 break;
             }
         }
@@ -114,6 +120,7 @@ static void on_exec(unsigned int vcpu, void *udata)
         current += b->n;
         if (active_op >= 0) {
             ops[active_op].insns += b->n;
+            ops[active_op].cur += b->n;
         }
         if (!only || calls + 1 == only) {
             ((struct block *)udata)->inside += b->n;

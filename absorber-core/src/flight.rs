@@ -910,7 +910,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         report.iterations += acc.iterations;
         end.a = acc.x;
         end.pseudo_accel = end.a;
-        if side.sign::<T>() * self.contact_force(end) > T::zero() {
+        // (The release test's residual is charged to the work cap; unaffordable, released.)
+        if !ws.afford_event(crate::newton::work::RESIDUAL)
+            || side.sign::<T>() * self.contact_force(end) > T::zero()
+        {
             end.contact = Contact::Off;
         }
         Ok(())

@@ -502,7 +502,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
 
     /// Restarts the model at the step to the input `base_accel` (see [`Model::step`]); returns
     /// the step's report. Without a restart state (a start that is not possible) the model
-    /// goes on from where it is.
+    /// goes on from where it is. Kept out of line (rare): the step's frame does not carry the
+    /// new state.
+    #[inline(never)]
+    #[cold]
     fn recover(&mut self, base_accel: T, work: u32) -> StepReport<T> {
         let report = StepReport {
             iterations: 0,
@@ -586,27 +589,21 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             work: 0,
             outcome: Outcome::Converged,
         };
-        let events = if S::FLIGHT && start.contact == Contact::InFlight {
+        // An event the work cap cannot afford (a plastic landing's own matrix) leaves the state
+        // as the event code found it, consistent, and waits for the next step (`waits`).
+        if S::FLIGHT && start.contact == Contact::InFlight {
             // 2'. In flight: a landing or a stop splits the step at the crossing.
-            self.flight_events(start, &mut next, base_accel, ws, &mut report)
+            let r = self.flight_events(start, &mut next, base_accel, ws, &mut report);
+            waits(ws, r)?;
         } else {
             // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
-            self.stop_events(start, &mut next, base_accel, ws, &mut report)
-                // 3. Separation: a track that would pull the ball lets it fly.
-                .and_then(|()| {
-                    if self.flies() && report.impact.is_none() {
-                        self.separation(start, &mut next, base_accel, ws, &mut report)
-                    } else {
-                        Ok(())
-                    }
-                })
-        };
-        match events {
-            // An event the work cap cannot afford (a plastic landing's own matrix) leaves the
-            // state as the event code found it, consistent, and waits for the next step; the
-            // step is flagged.
-            Err(Error::WorkCap) => ws.flag_capped(),
-            r => r?,
+            let r = self.stop_events(start, &mut next, base_accel, ws, &mut report);
+            waits(ws, r)?;
+            // 3. Separation: a track that would pull the ball lets it fly.
+            if self.flies() && report.impact.is_none() {
+                let r = self.separation(start, &mut next, base_accel, ws, &mut report);
+                waits(ws, r)?;
+            }
         }
         // 4. The clock: whole steps times h (a running sum of h drifts in f32).
         next.steps = start.steps.saturating_add(1);
@@ -618,6 +615,21 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         *state = next;
         Ok(report)
+    }
+}
+
+/// An event's result: one the work cap could not afford flags the step and waits for the next.
+#[inline(always)]
+fn waits<T: Real, const D: usize>(
+    ws: &mut Workspace<T, D>,
+    r: Result<(), Error>,
+) -> Result<(), Error> {
+    match r {
+        Err(Error::WorkCap) => {
+            ws.flag_capped();
+            Ok(())
+        }
+        r => r,
     }
 }
 

@@ -74,7 +74,8 @@ pub mod work {
     /// An assembly of the residual and the Newton matrix, and its banded factorization.
     pub const REFRESH: u32 = 16;
     /// The pivoting fallback on top of a refresh: the assembly again and the dense LU with
-    /// partial pivoting (`crate::linalg`).
+    /// partial pivoting (`crate::linalg`). Only without a cap ([`UNLIMITED`]): under a cap a
+    /// matrix the banded LU refuses stops the solve at the cap instead.
     pub const FALLBACK: u32 = 32;
     /// Units the Newmark solves of a step leave to the events at its end: the back-substitutions
     /// of a stop's and a landing's impulse in the trial's own factors (an event that needs a
@@ -143,6 +144,8 @@ pub struct Workspace<T, const D: usize> {
     far: bool,
     /// Band factorizations of this step that fell back to pivoting.
     fallbacks: u32,
+    /// Units the current Newton solve leaves to the events at the step's end.
+    reserve: u32,
 }
 
 impl<T: Real, const D: usize> Default for Workspace<T, D> {
@@ -164,6 +167,7 @@ impl<T: Real, const D: usize> Default for Workspace<T, D> {
             capped: false,
             far: false,
             fallbacks: 0,
+            reserve: 0,
         }
     }
 }
@@ -221,7 +225,10 @@ impl<T: Real, const D: usize> Workspace<T, D> {
     }
 
     /// The cap of a solve that stopped after its last correction `increment` (none if `taken`
-    /// is false), with the tolerance `tol`.
+    /// is false), with the tolerance `tol`. Kept out of line (rare): the Newton loop's frame
+    /// does not grow.
+    #[inline(never)]
+    #[cold]
     fn stop_at_cap(&mut self, taken: bool, increment: T, tol: T) {
         self.capped = true;
         let near = increment <= tol * lit(crate::model::RESTART_INCREMENT);
@@ -263,6 +270,16 @@ impl<T: Real, const D: usize> Workspace<T, D> {
         } else {
             false
         }
+    }
+
+    /// Charges `units` for an event's test if the cap affords them; otherwise the test is not
+    /// made (the event code takes its cheaper branch) and the step is flagged capped.
+    pub(crate) fn afford_event(&mut self, units: u32) -> bool {
+        let ok = self.charge(units);
+        if !ok {
+            self.capped = true;
+        }
+        ok
     }
 
     /// Whether an event found at the end of the trial step can still afford being split at its
@@ -346,9 +363,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// Assembles the residual and Newton matrix of `p` at `x` into the scratch slot, factors it
     /// (banded; partial pivoting when a pivot is too small) and makes it the current factors.
     /// Charges [`work::REFRESH`] (and [`work::FALLBACK`] for the fallback): fails with
-    /// [`Error::WorkCap`] when the cap cannot afford them. Not inlined: the work bound counts
-    /// its calls (`docs/embedded.md`).
-    #[inline(never)]
+    /// [`Error::WorkCap`] when the cap cannot afford them.
     pub(crate) fn refresh_at(
         &self,
         p: &Problem<'_, T, D>,
@@ -371,8 +386,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             None
         } else {
             if !pivot {
-                // The elimination gave up and destroyed the band: assemble it again.
-                if !ws.charge(work::FALLBACK) {
+                // The elimination gave up and destroyed the band: assemble it again and pivot —
+                // not under a work cap, whose bound counts banded factorizations only (the
+                // dense LU's cost grows as D³): there the solve stops at the cap.
+                if ws.cap < work::UNLIMITED || !ws.charge(work::FALLBACK) {
                     return Err(Error::WorkCap);
                 }
                 ws.fallbacks += 1;
@@ -430,40 +447,44 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     ) -> Result<Solved<T, D>, Error> {
         let max = self.params.integrator.max_iterations;
         let tol = self.params.integrator.tolerance;
-        let reserve = if step_solve { work::RESERVE } else { 0 };
+        ws.reserve = if step_solve { work::RESERVE } else { 0 };
         let half = lit::<T>(0.5);
         let mut increment = T::zero();
         let mut previous = T::zero();
         let mut refresh = false;
         let mut qva = [SVector::<T, D>::zeros(); 3];
         let mut dx = SVector::<T, D>::zeros();
+        // The iterations done when the cap stopped the solve (`u32::MAX`: it did not).
+        let mut stopped = u32::MAX;
         for it in 1..=max {
-            let mut reuse = !refresh && kind != NewtonKind::Full && ws.can_reuse(p);
+            let can = kind != NewtonKind::Full && ws.can_reuse(p);
             // Near the cap a refresh that cannot be afforded gives way to the factors in hand,
             // whose correction is then taken if it contracts at all.
-            let forced = !reuse
-                && kind != NewtonKind::Full
-                && !ws.affords(work::REFRESH + work::SOLVE, reserve)
-                && ws.can_reuse(p);
-            reuse |= forced;
+            let fresh = !refresh && can;
+            let forced = !fresh && can && !ws.affords(work::REFRESH + work::SOLVE, ws.reserve);
+            let reuse = fresh || forced;
             let cost = if reuse { work::RESIDUAL } else { work::REFRESH };
-            if !ws.affords(cost + work::SOLVE, reserve) {
+            if !ws.affords(cost + work::SOLVE, ws.reserve) {
                 // The cap: the iterate so far stands, flagged.
                 ws.stop_at_cap(it > 1, increment, tol);
-                return Ok(Solved {
-                    x,
-                    iterations: it - 1,
-                    increment,
-                });
+                stopped = it - 1;
+                break;
             }
             p.at(&x, &mut qva);
+            let [q, v, a] = &qva;
             if reuse {
                 ws.used += work::RESIDUAL;
-                let [q, v, a] = &qva;
                 self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut dx);
             } else {
-                let [q, v, a] = &qva;
-                self.refresh_at(p, [q, v, a], ws, &mut dx)?;
+                match self.refresh_at(p, [q, v, a], ws, &mut dx) {
+                    // A matrix the banded LU refuses, under a work cap: the iterate so far.
+                    Err(Error::WorkCap) => {
+                        ws.stop_at_cap(false, increment, tol);
+                        stopped = it - 1;
+                        break;
+                    }
+                    r => r?,
+                }
             }
             if !dx.as_slice().iter().all(|z| z.is_finite()) {
                 return Err(Error::NonFiniteState);
@@ -474,11 +495,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             if forced && norm >= previous {
                 // The factors in hand do not contract and no others can be afforded: the cap.
                 ws.stop_at_cap(it > 1, previous, tol);
-                return Ok(Solved {
-                    x,
-                    iterations: it,
-                    increment: norm,
-                });
+                increment = previous;
+                stopped = it;
+                break;
             }
             if reuse && !forced && it > 1 && norm > previous * half {
                 // Not taken: the reused matrix no longer fits; refresh at the same iterate.
@@ -490,7 +509,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             // than a fresh one, which converges quadratically: refresh at the next iteration.
             refresh = reuse && it > 1 && norm > previous * self.slow;
             let lambda = if norm > self.max_step {
-                self.damping(p, &x, &dx, norm, ws, reserve)
+                self.damping(p, &x, &dx, norm, ws)
             } else {
                 T::one()
             };
@@ -513,6 +532,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 });
             }
             previous = norm;
+        }
+        if stopped != u32::MAX {
+            return Ok(Solved {
+                x,
+                iterations: stopped,
+                increment,
+            });
         }
         if self.params.integrator.accept_after_budget && step_solve {
             return Ok(Solved {
@@ -541,7 +567,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// after 100 iterations where the undamped correction converges in 6 (docs/stability.md).
     ///
     /// Each trial is a residual and a back-substitution charged to the step's work; a trial the
-    /// cap (less `reserve`) cannot afford is not made, and the trust-radius cap is taken.
+    /// cap (less the solve's reserve) cannot afford is not made, and the trust-radius cap is
+    /// taken.
     ///
     /// Not inlined: it runs only on violent steps, and inlined it would grow the stack frame
     /// and the code of every Newton iteration.
@@ -553,7 +580,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         dx: &SVector<T, D>,
         norm: T,
         ws: &mut Workspace<T, D>,
-        reserve: u32,
     ) -> T {
         let floor = self.max_step / norm;
         let (one, quarter) = (T::one(), lit::<T>(0.25));
@@ -561,13 +587,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let mut qva = [SVector::<T, D>::zeros(); 3];
         let mut bar = SVector::<T, D>::zeros();
         for _ in 0..DAMPING_TRIALS {
-            if lambda <= floor || !ws.affords(work::RESIDUAL + work::SOLVE, reserve) {
+            if lambda <= floor || !ws.affords(work::RESIDUAL + work::SOLVE, ws.reserve) {
                 break;
             }
             ws.used += work::RESIDUAL;
-            let mut xt = *x;
-            xt.axpy(lambda, dx, one);
-            p.at(&xt, &mut qva);
+            // The trial point in `bar` (its residual overwrites it): no third vector here.
+            bar.copy_from(x);
+            bar.axpy(lambda, dx, one);
+            p.at(&bar, &mut qva);
             let [q, v, a] = &qva;
             self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut bar);
             if bar.as_slice().iter().all(|z| z.is_finite()) {

@@ -259,7 +259,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         } else {
             Contact::Beyond
         };
-        if plastic && inside {
+        // (The stick test's residual is charged to the work cap; unaffordable, no test: the
+        // ball rebounds plastically and the step is flagged.)
+        if plastic && inside && ws.afford_event(crate::newton::work::RESIDUAL) {
             // Stay on the stop if the contact force is compressive. Tried on `s` itself (what
             // holding changes is saved and put back otherwise: no second state in the frame).
             let saved = (s.contact, s.a, s.pseudo_accel, Self::spin_of(s));

@@ -126,6 +126,29 @@
 #define ABSORBER_EVENTS_STEP_END 1
 
 /**
+ * `integrator.max_work`: no cap beyond the iteration limits (default).
+ */
+#define ABSORBER_WORK_UNLIMITED 50000
+
+/**
+ * `integrator.max_work`: the firmware's cap (`absorber_core::newton::work::DEADLINE`): with
+ * `ABSORBER_EVENTS_STEP_END`, no step of the free ball costs more than twice the mean
+ * (`docs/embedded.md`).
+ */
+#define ABSORBER_WORK_DEADLINE 48
+
+/**
+ * `at_cap`: a step whose Newton solve reached the work cap takes its iterate (flagged
+ * `ABSORBER_OUTCOME_CAPPED`; default).
+ */
+#define ABSORBER_AT_CAP_TAKE 0
+
+/**
+ * `at_cap`: such a step fails with `ABSORBER_STATUS_WORK_CAP`, the state kept.
+ */
+#define ABSORBER_AT_CAP_KEEP 1
+
+/**
  * [`AbsorberReport::outcome`]: every Newton solve of the step converged.
  */
 #define ABSORBER_OUTCOME_CONVERGED 0
@@ -451,12 +474,17 @@ typedef struct AbsorberParams {
     double landing_restitution;
     /**
      * Hard cap on the work of one step in work units (`absorber_core::newton::work`: an
-     * assembly with its factorization 16, a residual 5, a back-substitution 1; at least 19).
+     * assembly with its factorization 16, a residual 5, a back-substitution 1; at least 24).
      * A step that reaches it is taken with its iterate and flagged (`ABSORBER_OUTCOME_CAPPED`);
      * default `ABSORBER_WORK_UNLIMITED`. A firmware with a deadline per sample sets
      * `ABSORBER_WORK_DEADLINE` with `ABSORBER_EVENTS_STEP_END` (`docs/embedded.md`).
      */
     uint32_t max_work;
+    /**
+     * `ABSORBER_AT_CAP_TAKE` (default) or `ABSORBER_AT_CAP_KEEP`: what a step whose Newton
+     * solve reached the cap does (`absorber_core::AtCap`).
+     */
+    uint32_t at_cap;
 } AbsorberParams;
 
 /**

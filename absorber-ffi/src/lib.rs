@@ -92,8 +92,8 @@ use absorber_core::monitor::{
 };
 use absorber_core::scalar::{lit, Real};
 use absorber_core::{
-    Contact, Error, EventLocation, Impact, ImpactModel, Model, NewtonKind, Outcome, Params, Scene,
-    Side, StepReport,
+    AtCap, Contact, Error, EventLocation, Impact, ImpactModel, Model, NewtonKind, Outcome, Params,
+    Scene, Side, StepReport,
 };
 use core::ffi::{c_char, c_void};
 use core::mem::{align_of, size_of};
@@ -167,11 +167,16 @@ pub const ABSORBER_EVENTS_CROSSING: u32 = 0;
 /// worst step under twice the mean; late by less than a step).
 pub const ABSORBER_EVENTS_STEP_END: u32 = 1;
 /// `integrator.max_work`: no cap beyond the iteration limits (default).
-pub const ABSORBER_WORK_UNLIMITED: u32 = absorber_core::newton::work::UNLIMITED;
+pub const ABSORBER_WORK_UNLIMITED: u32 = 50_000;
 /// `integrator.max_work`: the firmware's cap (`absorber_core::newton::work::DEADLINE`): with
 /// `ABSORBER_EVENTS_STEP_END`, no step of the free ball costs more than twice the mean
 /// (`docs/embedded.md`).
-pub const ABSORBER_WORK_DEADLINE: u32 = absorber_core::newton::work::DEADLINE;
+pub const ABSORBER_WORK_DEADLINE: u32 = 48;
+/// `at_cap`: a step whose Newton solve reached the work cap takes its iterate (flagged
+/// `ABSORBER_OUTCOME_CAPPED`; default).
+pub const ABSORBER_AT_CAP_TAKE: u32 = 0;
+/// `at_cap`: such a step fails with `ABSORBER_STATUS_WORK_CAP`, the state kept.
+pub const ABSORBER_AT_CAP_KEEP: u32 = 1;
 /// [`AbsorberReport::outcome`]: every Newton solve of the step converged.
 pub const ABSORBER_OUTCOME_CONVERGED: u32 = 0;
 /// [`AbsorberReport::outcome`]: a Newton solve stopped at the work cap (the step was taken).
@@ -206,6 +211,9 @@ const _: () = {
     assert!(align_of::<Slot<Monitor<f32>>>() <= ABSORBER_MODEL_ALIGN);
     assert!(align_of::<Slot<Monitor<f64>>>() <= ABSORBER_MODEL_ALIGN);
     assert!(FreeN6F32::DOFS <= ABSORBER_MAX_DOFS);
+    // The header's literals are the core's constants.
+    assert!(ABSORBER_WORK_UNLIMITED == absorber_core::newton::work::UNLIMITED);
+    assert!(ABSORBER_WORK_DEADLINE == absorber_core::newton::work::DEADLINE);
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -392,6 +400,9 @@ pub struct AbsorberParams {
     /// default `ABSORBER_WORK_UNLIMITED`. A firmware with a deadline per sample sets
     /// `ABSORBER_WORK_DEADLINE` with `ABSORBER_EVENTS_STEP_END` (`docs/embedded.md`).
     pub max_work: u32,
+    /// `ABSORBER_AT_CAP_TAKE` (default) or `ABSORBER_AT_CAP_KEEP`: what a step whose Newton
+    /// solve reached the cap does (`absorber_core::AtCap`).
+    pub at_cap: u32,
 }
 
 /// Opaque model: a pointer into the caller's storage, made by [`absorber_init`].
@@ -1056,6 +1067,16 @@ fn to_params<T: Real>(p: &AbsorberParams) -> Result<Params<T>, Error> {
     };
     q.ball.landing_restitution = lit(p.landing_restitution);
     q.integrator.max_work = p.max_work;
+    q.integrator.at_cap = match p.at_cap {
+        ABSORBER_AT_CAP_TAKE => AtCap::Take,
+        ABSORBER_AT_CAP_KEEP => AtCap::Keep,
+        _ => {
+            return Err(invalid(
+                "at_cap",
+                "must be ABSORBER_AT_CAP_TAKE or ABSORBER_AT_CAP_KEEP",
+            ))
+        }
+    };
     Ok(q)
 }
 
@@ -1180,6 +1201,10 @@ pub unsafe extern "C" fn absorber_params_default(params: *mut AbsorberParams) ->
         flight: u32::from(d.ball.flight),
         landing_restitution: d.ball.landing_restitution,
         max_work: d.integrator.max_work,
+        at_cap: match d.integrator.at_cap {
+            AtCap::Take => ABSORBER_AT_CAP_TAKE,
+            AtCap::Keep => ABSORBER_AT_CAP_KEEP,
+        },
     };
     // SAFETY: non-null, valid for writes by the caller's guarantee.
     unsafe { params.write(p) };

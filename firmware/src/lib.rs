@@ -96,6 +96,11 @@ pub trait Sim: Sized {
     fn state_words(&self, f: &mut dyn FnMut(u32));
     /// Extra figures printed at every whole second, each also fed to `f` (none by default).
     fn second(&self, _out: &mut dyn Write, _f: &mut dyn FnMut(u32)) {}
+    /// The scene's work cap per step (`Integrator::max_work`, work units), printed with the
+    /// units' weights for the static work bound (`scripts/embedded-report.py`); 0 if unknown.
+    fn work_cap(&self) -> u32 {
+        0
+    }
     /// Excitation frequency \[Hz\] ([`FREQUENCY_HZ`] unless a scene drives at another).
     fn frequency() -> f32 {
         FREQUENCY_HZ
@@ -126,6 +131,10 @@ impl<S: Scene, const N: usize, const D: usize> Sim for Model<f32, S, N, D> {
 
     fn h(&self) -> f32 {
         self.params().integrator.step
+    }
+
+    fn work_cap(&self) -> u32 {
+        self.params().integrator.max_work
     }
 
     fn tip(&self) -> f32 {
@@ -213,6 +222,10 @@ impl<M: Sim> Sim for InFlight<M> {
 
     fn spin_start(&mut self, rate: f32) -> Result<(), Error> {
         self.0.spin_start(rate)
+    }
+
+    fn work_cap(&self) -> u32 {
+        self.0.work_cap()
     }
 
     /// Inlined: the counted function is the wrapped model's `Sim::step`.
@@ -316,6 +329,10 @@ impl<S: Scene, const N: usize, const D: usize, C: Config> Sim
         spin_start(&mut self.0, rate)
     }
 
+    fn work_cap(&self) -> u32 {
+        self.0.work_cap()
+    }
+
     #[inline(never)]
     fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
         Model::step(&mut self.0, base_accel)
@@ -413,14 +430,20 @@ impl<
         spin_start(&mut self.model, rate)
     }
 
+    fn work_cap(&self) -> u32 {
+        self.model.work_cap()
+    }
+
     /// Model step, then `Monitor::record` (not after a failed step: the state did not move).
     #[inline(never)]
     fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
-        let r = Model::step(&mut self.model, base_accel)?;
-        if monitor_record(&mut self.monitor, &self.model, &r, base_accel).is_err() {
-            self.record_errors = self.record_errors.saturating_add(1);
+        let r = Model::step(&mut self.model, base_accel);
+        if let Ok(report) = &r {
+            if monitor_record(&mut self.monitor, &self.model, report, base_accel).is_err() {
+                self.record_errors = self.record_errors.saturating_add(1);
+            }
         }
-        Ok(r)
+        r
     }
 
     fn h(&self) -> f32 {
@@ -510,6 +533,50 @@ impl<
             m.rejected(),
             self.record_errors
         );
+    }
+}
+
+/// A model whose `step` can panic (`fw-planted`, never run): the panic check of
+/// `scripts/embedded-report.py` must find the planted path, or it proves nothing.
+pub struct Planted<M>(pub M);
+
+impl<M: Sim> Sim for Planted<M> {
+    fn name() -> &'static str {
+        "planted panic"
+    }
+
+    fn init() -> Result<Self, Error> {
+        M::init().map(Planted)
+    }
+
+    /// The wrapped step, then a panic on one input bit pattern (the optimizer cannot remove it).
+    #[inline(never)]
+    fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
+        let r = self.0.step(base_accel)?;
+        if base_accel.to_bits() == 0x4049_0fdb {
+            panic!("planted");
+        }
+        Ok(r)
+    }
+
+    fn h(&self) -> f32 {
+        self.0.h()
+    }
+
+    fn tip(&self) -> f32 {
+        self.0.tip()
+    }
+
+    fn ball(&self) -> f32 {
+        self.0.ball()
+    }
+
+    fn static_tip(&self) -> f32 {
+        self.0.static_tip()
+    }
+
+    fn state_words(&self, f: &mut dyn FnMut(u32)) {
+        self.0.state_words(f)
     }
 }
 
@@ -670,6 +737,18 @@ pub fn run<M: Sim, W: Write, P: Probe>(
         let _ = writeln!(out, "stress {}", st.name);
     }
     let _ = writeln!(out, "static tip={}", F(m.static_tip()));
+    {
+        use absorber_core::newton::work as w;
+        let _ = writeln!(
+            out,
+            "work cap={} refresh={} residual={} solve={} fallback={}",
+            m.work_cap(),
+            w::REFRESH,
+            w::RESIDUAL,
+            w::SOLVE,
+            w::FALLBACK
+        );
+    }
     let mut hash = Fnv::default();
     let mut s = Summary::default();
     if let Some(rate) = setup.stress.and_then(|st| st.spin) {

@@ -168,7 +168,7 @@ pub fn target_main<M: Sim>(slot: &'static mut MaybeUninit<M>) -> ! {
     );
     let _ = writeln!(
         out,
-        "# target: stack high-water of init (at_rest) from reset = {init_used} bytes"
+        "# target: boot stack from reset = {init_used} bytes (high-water through the scene's construction)"
     );
     if probe.enabled {
         let _ = writeln!(
@@ -216,7 +216,6 @@ pub fn cost_main() -> ! {
 }
 
 /// Panics end the run with exit code 101 (the model itself never panics; see docs/embedded.md).
-#[cfg(not(feature = "panic-never"))]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
     if let Ok(mut e) = semihosting::io::stderr() {
@@ -227,16 +226,4 @@ fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
         let _ = e.write_all(b"\n");
     }
     semihosting::process::exit(101)
-}
-
-/// `panic-never` build: any panic path the optimizer cannot remove leaves a reference to an
-/// undefined symbol, so the link fails and names the caller.
-#[cfg(feature = "panic-never")]
-#[panic_handler]
-fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
-    extern "Rust" {
-        fn panic_path_is_reachable_in_the_firmware() -> !;
-    }
-    // SAFETY: never called in a binary that links.
-    unsafe { panic_path_is_reachable_in_the_firmware() }
 }
