@@ -548,6 +548,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub fn restarts(&self) -> u32 {
         self.recovery.restarts
     }
+
+    /// The Newton workspace after the last step: its work units, whether it was capped, and
+    /// how many banded factorizations fell back to pivoting ([`Workspace::fallbacks`]).
+    pub fn workspace(&self) -> &Workspace<T, D> {
+        &self.work
+    }
 }
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {

@@ -169,3 +169,31 @@ fn a_cap_below_one_iteration_is_refused() {
         }
     ));
 }
+
+/// The statement of `linalg`'s module doc: the banded LU gives up, and the pivoting fallback
+/// runs, exactly once in the paper's 20 s free-ball run in `f32` with events at the crossing
+/// (step 2,499), and never with the firmware's events at the step end and cap.
+#[test]
+fn the_pivoting_fallback_runs_once_in_the_paper_scene() {
+    for (events, cap, expected) in [
+        (EventLocation::Crossing, work::UNLIMITED, vec![2499u32]),
+        (EventLocation::StepEnd, work::DEADLINE, vec![]),
+    ] {
+        let mut p = Params::<f32>::default();
+        p.integrator.events = events;
+        p.integrator.max_work = cap;
+        let mut m = FreeBallModel::<f32, 3, 13>::at_rest(p, 0.0).expect("start");
+        let omega = 2.0 * core::f32::consts::PI * 4.13f32;
+        let mut steps = vec![];
+        for k in 1..=6667u32 {
+            // The firmware's input (`absorber_firmware::base_accel`): t = k h first.
+            let t = k as f32 * 0.003f32;
+            let a = -0.5e-3f32 * omega * omega * libm::sinf(omega * t);
+            m.step(a).expect("step");
+            if m.workspace().fallbacks() > 0 {
+                steps.push(k);
+            }
+        }
+        assert_eq!(steps, expected, "{events:?}");
+    }
+}

@@ -367,6 +367,14 @@ fn a_bad_parameter_is_refused_with_the_name_of_its_field() {
     p.integrator.events = 2;
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "integrator.events");
+    let mut p = defaults();
+    p.max_work = 10;
+    let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
+    assert_eq!(text(&e.field), "integrator.max_work");
+    let mut p = defaults();
+    p.at_cap = 2;
+    let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
+    assert_eq!(text(&e.field), "at_cap");
     // The beam-only scene does not validate the ball (as the core).
     let mut p = defaults();
     p.ball.mass = -1.0;
@@ -377,6 +385,39 @@ fn a_bad_parameter_is_refused_with_the_name_of_its_field() {
     );
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "ball.mass");
+}
+
+/// The work cap through the C API: under noise over the whole input range every step's report
+/// stays within `max_work`, flags its outcome, and a capped step with `ABSORBER_AT_CAP_KEEP`
+/// returns `ABSORBER_STATUS_WORK_CAP` with the state as it was.
+#[test]
+fn the_work_cap_and_its_outcomes_reach_the_c_api() {
+    let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
+    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &firmware());
+    assert_eq!(s, AbsorberStatus::Ok);
+    let mut seed = 0x1234_5678u32;
+    let mut outcomes = [0u32; 3];
+    for _ in 0..500 {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        let a = ((seed >> 8) as f32 / 8_388_608.0 - 1.0) * 1.0e4;
+        let mut r = AbsorberReportF32::default();
+        // SAFETY: live handle, valid report.
+        if unsafe { absorber_step_f32(m, a, &mut r) } == AbsorberStatus::Ok {
+            assert!(r.work <= ABSORBER_WORK_DEADLINE, "{}", r.work);
+            outcomes[r.outcome as usize] += 1;
+        }
+    }
+    assert!(outcomes[1] > 0 && outcomes[2] > 0, "{outcomes:?}");
+    let mut p = firmware();
+    p.at_cap = ABSORBER_AT_CAP_KEEP;
+    let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
+    let (_, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
+    let mut r = AbsorberReportF32::default();
+    // SAFETY: live handle, valid report.
+    let s = unsafe { absorber_step_f32(m, 5000.0, &mut r) };
+    assert_eq!(s, AbsorberStatus::WorkCap);
 }
 
 #[test]
