@@ -48,7 +48,7 @@ export CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="--remap-path-prefix=${CARGO
 cargo build -q -p absorber-ffi --target "$target" --profile fw --config firmware/fw-profile.toml \
     --no-default-features --features free-n3-f32
 cargo build -q --release -p absorber-firmware --bin fw-free --bin fw-free-monitor
-cargo build -q -p absorber-firmware --target "$target" --profile fw --config firmware/fw-profile.toml --bin fw-free
+cargo build -q -p absorber-firmware --target "$target" --profile fw --config firmware/fw-profile.toml --bin fw-free --bin fw-free-monitor
 lib=$tdir/$target/fw/libabsorber_ffi.a
 
 cpu=(-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard)
@@ -103,32 +103,55 @@ rust_elf=$tdir/$target/fw/fw-free
 rust_step=$(arm-none-eabi-nm -C "$rust_elf" | sed -n 's/^[0-9a-f]* [Tt] \(<.* as absorber_firmware::Sim>::step\)$/\1/p')
 count "$rust_elf" "$rust_step" "$out/rust-step.counts" "expect=$h_free"
 count "$out/absorber-c" absorber_step_f32 "$out/c-step.counts" "expect=$h_free expect-monitor=$h_mon"
+for elf in "$rust_elf" "$tdir/$target/fw/fw-free-monitor" "$out/absorber-c"; do
+    arm-none-eabi-size -A "$elf" | awk '$1 == ".text" {print $2}'
+done >"$out/text-sizes"
 python3 - "$out" <<'PY'
 import bisect, re, sys, pathlib
 out = pathlib.Path(sys.argv[1])
 rust = [int(x) for x in (out / "rust-step.counts").read_text().split()]
-c = [int(x) for x in (out / "c-step.counts").read_text().split()][: len(rust)]
-assert len(rust) == 6667 and len(c) == 6667, (len(rust), len(c))
+# The C firmware runs the model twice (alone, then with the monitor): 2 × 6667 calls, of which
+# the first 6667 are fw-free's run; the profile below covers every call.
+c_all = [int(x) for x in (out / "c-step.counts").read_text().split()]
+c = c_all[: len(rust)]
+assert len(rust) == 6667 and len(c_all) == 2 * 6667, (len(rust), len(c_all))
 mr, mc = sum(rust) / len(rust), sum(c) / len(c)
 extra = [b - a for a, b in zip(rust, c)]
 share = (mc - mr) / mr
-# The wrapper's own instructions: exclusive counts (plugin profile) of the functions that are
-# not the core, libm or the compiler's runtime, i.e. the C API layer itself.
-syms = sorted(
-    (int(f[0], 16) & ~1, f[2])
-    for f in (l.split(" ", 2) for l in (out / "c-step.counts.nm").read_text().splitlines())
-    if len(f) == 3 and f[1] in "tTwW"
-)
-starts = [a for a, _ in syms]
-core = re.compile(r"absorber_core::|libm::|compiler_builtins::|^__aeabi|^core::")
-own = 0
-for line in (out / "c-step.counts.prof").read_text().splitlines():
-    addr, _, total = line.split()
-    i = bisect.bisect_right(starts, int(addr, 16)) - 1
-    name = syms[i][1] if i >= 0 else "?"
-    if not core.search(name):
-        own += int(total)
-own /= len(c)
+
+
+def profile(stem, calls):
+    """Exclusive instructions per call of each function (the plugin's per-block profile)."""
+    syms = sorted(
+        (int(f[0], 16) & ~1, f[2])
+        for f in (l.split(" ", 2) for l in (out / f"{stem}.nm").read_text().splitlines())
+        if len(f) == 3 and f[1] in "tTwW"
+    )
+    starts = [a for a, _ in syms]
+    per = {}
+    for line in (out / f"{stem}.prof").read_text().splitlines():
+        addr, _, total = line.split()
+        i = bisect.bisect_right(starts, int(addr, 16)) - 1
+        name = syms[i][1] if i >= 0 else "?"
+        name = re.sub(r"::h[0-9a-f]{16}$", "", name)
+        per[name] = per.get(name, 0) + int(total) / calls
+    return per
+
+
+prust, pc = profile("rust-step.counts", len(rust)), profile("c-step.counts", len(c_all))
+# The wrapper's own instructions: the functions that are not the core, libm or the compiler's
+# runtime, i.e. the C API layer itself.
+core = re.compile(r"absorber_core::|libm::|compiler_builtins::|^__aeabi|^core::|absorber_firmware::")
+own = sum(v for k, v in pc.items() if not core.search(k))
+# Where the rest of the difference is: the same core functions compiled into the library.
+def short(n):
+    return re.sub(r"<[^<>]*>", "", re.sub(r"<[^<>]*>", "", n))[-60:]
+same = {}
+for k in set(prust) | set(pc):
+    if core.search(k) and "absorber_firmware::" not in k:
+        same[short(k)] = same.get(short(k), 0) + pc.get(k, 0) - prust.get(k, 0)
+top = sorted(same.items(), key=lambda kv: -abs(kv[1]))[:4]
+sizes = [int(x) for x in (out / "text-sizes").read_text().split()]
 text = (
     f"instructions per step, free ball N = 3 f32, profile fw, mean over 6667 steps:\n"
     f"  Rust firmware fw-free, Sim::step       {mr:,.1f} (worst {max(rust):,})\n"
@@ -136,6 +159,9 @@ text = (
     f"  the C API's own instructions per step  {own:,.1f} ({100 * own / mr:.3f} %)\n"
     f"  difference of the two per step         {mc - mr:+,.1f} ({100 * share:+.3f} %; "
     f"per-step difference min {min(extra):+,}, max {max(extra):+,})\n"
+    f"  of which the core compiled into the library, largest per function: "
+    + ", ".join(f"{n} {d:+,.1f}" for n, d in top) + "\n"
+    f".text of the images: fw-free {sizes[0]:,}, fw-free-monitor {sizes[1]:,}, C example {sizes[2]:,}\n"
 )
 (out / "report.txt").write_text(text)
 print(text, end="")

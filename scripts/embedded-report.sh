@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# Regenerates the measured sections of docs/embedded.md: instructions per `step` (exact, QEMU
-# TCG plugin), a cycle/µs estimate, flash and RAM of the model, the stack high-water mark of
-# `step`, and the panic/heap check of the step path, for the free-ball (full and modified
-# Newton, and with the on-device monitor, whose `Monitor::record` is also counted on its own),
-# beam-only and locked-ball scenes.
+# Regenerates the measured sections of docs/embedded.md and docs/embedded.json: instructions per
+# `step` (exact, QEMU TCG plugin) with the expensive operations counted per step (assembly,
+# factorization, pivoting fallback, residual, back-substitution), the static work bound of each
+# bin (its work cap times the measured cost of a work unit, plus the step's other code), the
+# stress set (scripts: firmware/src/stress.rs) run under QEMU bit for bit against the host, a
+# cycle/µs estimate, flash and RAM of the model, the stack of `step` (static bound and
+# high-water) and of the boot (from reset to the end of the scene's construction), and the
+# panic/heap check of the step path (with `fw-planted`, whose planted panic it must find).
 #
-# Writes docs/embedded.md's generated section and docs/embedded.json (per scene: mean and worst
-# instructions per step, static stack bound, flash at opt 3 and s), then checks them against
+# Writes docs/embedded.md's generated section and docs/embedded.json, then checks them against
 # firmware/budget.toml. With --check (CI) the docs are left alone: the figures go to the target
 # directory and only the budget check counts.
 #
@@ -20,6 +22,7 @@ target=thumbv7em-none-eabihf
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$root/target}
 tdir=$CARGO_TARGET_DIR
 work=$tdir/embedded-report
+rm -rf "$work"
 mkdir -p "$work"
 
 for tool in qemu-system-arm arm-none-eabi-size arm-none-eabi-nm arm-none-eabi-objdump gcc python3; do
@@ -39,43 +42,63 @@ qemu() {
         -semihosting-config enable=on,target=native "$@"
 }
 
-# count_calls <elf> <stem> <hash> <nm -C pattern of the function> <suffix>: runs the firmware
-# under the plugin, counting the instructions of every call of the one function whose demangled
-# name matches, from its entry to the return address of any of its `bl` call sites.
-count_calls() {
-    local elf=$1 stem=$2 hash=$3 pattern=$4 sfx=$5 entry rets site
-    entry=$(awk -v p="$pattern" '$0 ~ p {print "0x" $1}' "$stem.nm" | sed 's/^0x0*/0x/')
-    [ -n "$entry" ] || { echo "embedded-report: no symbol matching '$pattern' in $elf"; exit 1; }
-    [ "$(wc -w <<<"$entry")" = 1 ] || { echo "embedded-report: several symbols match '$pattern' in $elf"; exit 1; }
-    rets=""
-    for site in $(awk -v e="${entry#0x}" '$2 == "bl" && $3 == e {sub(":", "", $1); print $1}' "$stem.dis"); do
-        rets+=$(printf ',ret=0x%x' $((0x$site + 4)))   # bl is a 32-bit instruction
-    done
-    [ -n "$rets" ] || { echo "embedded-report: no call of '$pattern' in $elf"; exit 1; }
-    echo "$entry" >"$stem$sfx.entry"
-    qemu -kernel "$elf" -append "expect=$hash" \
-        -plugin "$work/step-counter.so,entry=$entry$rets,out=$stem$sfx.counts,prof=$stem$sfx.prof" >"$stem$sfx.qemu"
+# plugin_args <stem> <nm -C pattern> [op patterns...]: the plugin's entry=/ret= of the counted
+# function and one op=<entry>/<ret>… per symbol matching each op pattern (every instance).
+plugin_args() {
+    python3 scripts/embedded-report.py --plugin-args "$@"
 }
 
+# count <elf> <stem> <args> <suffix> <plugin args>: one QEMU run under the plugin.
+count() {
+    local elf=$1 stem=$2 args=$3 sfx=$4 pargs=$5
+    qemu -kernel "$elf" -append "$args" \
+        -plugin "$work/step-counter.so,$pargs,out=$stem$sfx.counts,prof=$stem$sfx.prof" >"$stem$sfx.qemu"
+}
+
+# The operations the work cap counts (their instructions per call, per step).
+ops=(' absorber_core::system::System<T,S,_,_>::residual_and_jacobian$'
+    ' absorber_core::linalg::BandMatrix<T,_>::factor$'
+    '::pivot_fallback$'
+    ' absorber_core::system::System<T,S,_,_>::residual$'
+    ' absorber_core::newton::Workspace<T,_>::solve$')
+step=' as absorber_firmware::Sim>::step$'
+scenes=(free free-rolling free-flight free-modified free-monitor free-n6 beam locked estimator)
 for profile in fw fw-size; do
-    for scene in free free-rolling free-flight free-modified free-step-end free-flight-step-end free-monitor free-n6 beam locked estimator empty; do
+    for scene in "${scenes[@]}" empty planted; do
         elf=$tdir/$target/$profile/fw-$scene
         stem=$work/$profile-$scene
-        "$tdir/release/fw-$scene" >"$stem.host"
-        hash=$(sed -n 's/^state_hash=//p' "$stem.host")
         arm-none-eabi-nm -C "$elf" >"$stem.nm"
         arm-none-eabi-size -A "$elf" >"$stem.size"
         [ "$scene" = empty ] && continue
         arm-none-eabi-objdump -d --no-show-raw-insn "$elf" >"$stem.dis"
-        # Instructions of every call of `Sim::step` -> $stem.{entry,counts,prof,qemu}.
-        count_calls "$elf" "$stem" "$hash" ' as absorber_firmware::Sim>::step$' ""
-        # The monitor's share of the step, counted on its own -> $stem.record.{entry,counts,prof,qemu}.
+        [ "$scene" = planted ] && continue
+        "$tdir/release/fw-$scene" >"$stem.host"
+        hash=$(sed -n 's/^state_hash=//p' "$stem.host")
+        echo "$profile-$scene" >&2
+        if [ "$profile" = fw ]; then
+            count "$elf" "$stem" "expect=$hash" "" "$(plugin_args "$stem" "$step" "${ops[@]}")"
+        else
+            count "$elf" "$stem" "expect=$hash" "" "$(plugin_args "$stem" "$step")"
+        fi
+        # The monitor's share of the step, counted on its own -> $stem.record.{counts,prof,qemu}.
         if [ "$scene" = free-monitor ]; then
-            count_calls "$elf" "$stem" "$hash" ' absorber_firmware::monitor_record$' .record
+            count "$elf" "$stem" "expect=$hash" .record "$(plugin_args "$stem" ' absorber_firmware::monitor_record$')"
         fi
         qemu -kernel "$elf" -append "expect=$hash stack" >"$stem.stack"
     done
 done
+
+# The stress set (profile fw): every scene on the free ball, three on every other bin. Each run
+# must reproduce the host's fingerprint (the firmware exits 0 only then).
+python3 scripts/embedded-report.py --stress-list >"$work/stress.tsv"
+while IFS=$'\t' read -r key scene stress; do
+    stem=$work/stress-$key
+    "$tdir/release/fw-$scene" "stress=$stress" >"$stem.host"
+    hash=$(sed -n 's/^state_hash=//p' "$stem.host")
+    echo "stress $key" >&2
+    count "$tdir/$target/fw/fw-$scene" "$stem" "expect=$hash stress=$stress" "" \
+        "$(plugin_args "$work/fw-$scene" "$step" "${ops[@]}")"
+done <"$work/stress.tsv"
 
 if [ $check_only = 1 ]; then
     cp docs/embedded.md "$work/embedded.md"

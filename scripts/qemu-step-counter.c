@@ -5,11 +5,18 @@
  * `entry`) until control comes back to the caller (a block starting at `ret`, the address after
  * a call; `ret=` may be given once per call site), including everything the function calls.
  * Writes one count per call, in call order, to `out`; with `prof=<path>`, also the instructions
- * executed inside the calls per translation block (`<pc> <instructions in the block> <count>`, for a profile).
+ * executed inside the calls per translation block (`<pc> <instructions in the block> <count>`, for a profile);
+ * with `only=<n>` as well, the profile of the n-th call alone (1 = the first).
  * Built and used by scripts/embedded-report.sh:
  *
  *   gcc -O2 -shared -fPIC -o step-counter.so scripts/qemu-step-counter.c
  *   qemu-system-arm ... -plugin ./step-counter.so,entry=0x1234,ret=0x5678,out=counts.txt
+ *
+ * With `op=<entry>/<ret>/<ret>…` (up to 16 times: the operations), each line also carries, per
+ * operation in the order given, the calls made during that outer call, the instructions executed
+ * inside them (entry to return address, callees included) and the most in one of those calls:
+ * `<total> <calls> <insns> <most> …`.
+ * Operations do not nest (an operation entered while another runs counts towards the first).
  *
  * Written against the QEMU plugin API version 1 (QEMU 6.x-8.1, e.g. Debian 12's QEMU 7.2).
  * Debian ships no plugin headers, so the few declarations needed are repeated here.
@@ -44,23 +51,51 @@ struct block {
     struct block *next;
 };
 
+#define MAX_RET 64
 static struct block *blocks;
 
-#define MAX_RET 16
+#define MAX_OPS 16
+struct op {
+    uint64_t entry, ret[MAX_RET];
+    int n_ret;
+    uint64_t calls, insns, cur, maxcall;
+};
+static struct op ops[MAX_OPS];
+static int n_ops, active_op = -1;
+
 static uint64_t entry, ret[MAX_RET];
 static int n_ret;
 static int counting;
-static uint64_t current, calls;
+static uint64_t current, calls, only;
 static FILE *out, *prof;
 
 static void on_exec(unsigned int vcpu, void *udata)
 {
     const struct block *b = udata;
     (void)vcpu;
+    if (counting && active_op >= 0) {
+        struct op *o = &ops[active_op];
+        for (int i = 0; i < o->n_ret; i++) {
+            if (b->pc == o->ret[i]) {
+                if (o->cur > o->maxcall) {
+                    o->maxcall = o->cur;
+                }
+                active_op = -1;
+                break;
+            }
+        }
+    }
     if (counting) {
         for (int i = 0; i < n_ret; i++) {
             if (b->pc == ret[i]) {
-                fprintf(out, "%" PRIu64 "\n", current);
+                fprintf(out, "%" PRIu64, current);
+                for (int k = 0; k < n_ops; k++) {
+                    fprintf(out, " %" PRIu64 " %" PRIu64 " %" PRIu64, ops[k].calls, ops[k].insns,
+                            ops[k].maxcall);
+                    ops[k].calls = ops[k].insns = ops[k].maxcall = 0;
+                }
+                fprintf(out, "\n");
+                active_op = -1;
                 calls++;
                 counting = 0;
                 break;
@@ -71,9 +106,25 @@ static void on_exec(unsigned int vcpu, void *udata)
         counting = 1;
         current = 0;
     }
+    if (counting && active_op < 0) {
+        for (int k = 0; k < n_ops; k++) {
+            if (b->pc == ops[k].entry) {
+                active_op = k;
+                ops[k].calls++;
+                ops[k].cur = 0;
+                break;
+            }
+        }
+    }
     if (counting) {
         current += b->n;
-        ((struct block *)udata)->inside += b->n;
+        if (active_op >= 0) {
+            ops[active_op].insns += b->n;
+            ops[active_op].cur += b->n;
+        }
+        if (!only || calls + 1 == only) {
+            ((struct block *)udata)->inside += b->n;
+        }
     }
 }
 
@@ -119,6 +170,19 @@ EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t *info, int
             entry = strtoull(argv[i] + 6, NULL, 0) & ~1ull;
         } else if (!strncmp(argv[i], "ret=", 4) && n_ret < MAX_RET) {
             ret[n_ret++] = strtoull(argv[i] + 4, NULL, 0) & ~1ull;
+        } else if (!strncmp(argv[i], "op=", 3) && n_ops < MAX_OPS) {
+            struct op *o = &ops[n_ops++];
+            char *p = argv[i] + 3;
+            o->entry = strtoull(p, &p, 0) & ~1ull;
+            while (*p == '/' && o->n_ret < MAX_RET) {
+                o->ret[o->n_ret++] = strtoull(p + 1, &p, 0) & ~1ull;
+            }
+            if (!o->entry || !o->n_ret) {
+                fprintf(stderr, "step-counter: op=<entry>/<ret>[/<ret>…] expected, got %s\n", argv[i]);
+                return 1;
+            }
+        } else if (!strncmp(argv[i], "only=", 5)) {
+            only = strtoull(argv[i] + 5, NULL, 0);
         } else if (!strncmp(argv[i], "prof=", 5)) {
             if (!(prof = fopen(argv[i] + 5, "w"))) {
                 return 1;

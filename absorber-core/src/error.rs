@@ -29,6 +29,10 @@ pub enum Error {
     NonFiniteState,
     /// A linear system was singular (e.g. a zero mass). The state is unchanged.
     Singular,
+    /// The step's work cap ([`crate::Integrator::max_work`]) was reached by an operation that
+    /// cannot stop early (an impulse's back-substitution, the pivoting fallback). The state is
+    /// unchanged.
+    WorkCap,
 }
 
 impl fmt::Display for Error {
@@ -47,6 +51,7 @@ impl fmt::Display for Error {
             ),
             Error::NonFiniteState => write!(f, "state became non-finite (divergence); state kept"),
             Error::Singular => write!(f, "singular system matrix; state kept"),
+            Error::WorkCap => write!(f, "the step's work cap was reached; state kept"),
         }
     }
 }

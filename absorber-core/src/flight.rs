@@ -442,7 +442,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         next: &mut State<T, D>,
     ) -> Result<(), Error> {
         let h = self.params.integrator.step;
-        if self.events_at_step_end() {
+        if self.event_at_end(ws) {
             // At the step's end: the trial stands and the ball takes off where it ended.
             report.separation = Some(start.time + h);
             self.fly_from_track(next);
@@ -600,7 +600,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let Some(event) = event else {
             return Ok(());
         };
-        if self.events_at_step_end() {
+        if self.event_at_end(ws) {
             let stop = stop.map(|(side, inside, _)| (side, inside));
             return self.flight_events_at_end(start, trial, stop, landing_speed, ws, report);
         }
@@ -741,6 +741,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             landing.normal_impulse = p;
             landing.bounced = true;
         } else {
+            // The rolling metric costs a refresh: unaffordable, the landing waits (the state
+            // is not touched further; docs/embedded.md, "Work cap").
+            if !ws.affords(crate::newton::work::REFRESH + crate::newton::work::SOLVE, 0) {
+                return Err(Error::WorkCap);
+            }
             // θ on the branch of ψ, and φ re-based so that r_b φ = R_tr ψ − ρ θ.
             let x = Self::local(&s.q, &s.v, &s.a);
             let (psi, _) = tip::psi_and_rate(&x);
@@ -905,7 +910,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         report.iterations += acc.iterations;
         end.a = acc.x;
         end.pseudo_accel = end.a;
-        if side.sign::<T>() * self.contact_force(end) > T::zero() {
+        // (The release test's residual is charged to the work cap; unaffordable, released.)
+        if !ws.afford_event(crate::newton::work::RESIDUAL)
+            || side.sign::<T>() * self.contact_force(end) > T::zero()
+        {
             end.contact = Contact::Off;
         }
         Ok(())
@@ -966,6 +974,8 @@ mod tests {
             impact: None,
             separation: None,
             landing: None,
+            work: 0,
+            outcome: crate::Outcome::Converged,
         };
         m.sys.land(&mut s, &mut ws, &mut report).expect("land");
         let l = report.landing.expect("landed");

@@ -5,10 +5,13 @@
 //! ball rolling without slip in a circular track inside the tip mass, between two stops.
 //!
 //! **Promise**: fixed step, no heap, no panic, bounded work. Every step does at most
-//! `max_iterations` Newton iterations per solve (at most five solves when a stop is hit), allocates
-//! nothing, and on failure returns an [`Error`] and leaves the state exactly as it was. The
-//! crate is `#![no_std]` without `alloc`, generic over `f32`/`f64` and over the number of
-//! elements `N`; scenes ([`scene`]) leave out at compile time what they do not contain.
+//! [`Integrator::max_work`] units of work ([`newton::work`]: assemblies, factorizations,
+//! residuals, back-substitutions, counted across every solve of the step), allocates nothing,
+//! and on failure returns an [`Error`] and leaves the state exactly as it was; a step that
+//! reaches the cap is taken and flagged, and a run of failed steps restarts the model by itself
+//! ([`Model::step`]). The crate is `#![no_std]` without `alloc`, generic over `f32`/`f64` and
+//! over the number of elements `N`; scenes ([`scene`]) leave out at compile time what they do
+//! not contain.
 //!
 //! ```
 //! use absorber_core::{FreeBallModel, Params};
@@ -63,10 +66,10 @@ pub use energy::Energies;
 pub use error::Error;
 pub use flight::{Flight, Landing};
 pub use loads::{ArmParams, Loads, PointMass};
-pub use model::{Contact, Impact, Model, Side, State, StepReport};
+pub use model::{Contact, Impact, Model, Outcome, Side, State, StepReport, RESTART_AFTER};
 pub use outputs::ContactForces;
 pub use params::{
-    BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,
+    AtCap, BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,
     NewtonKind, Params, TipParams,
 };
 pub use scalar::Real;

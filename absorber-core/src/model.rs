@@ -3,7 +3,10 @@
 //! A step is: the Newmark predictor and Newton corrector over the whole step
 //! ([`crate::newmark`], [`crate::newton`]), then the stop events — an impact splits the step at
 //! the crossing, a held ball is released when the stop would pull it ([`crate::stops`]) —, then
-//! the clock. The equations themselves are in [`crate::system`] (beam, tip body, ball), the
+//! the clock. Every expensive operation of the step is charged to its work cap
+//! ([`crate::newton::work`]), and a step that could not finish within it is flagged or fails;
+//! a run of such steps makes the model restart itself ([`Model::step`], "Recovery"). The
+//! equations themselves are in [`crate::system`] (beam, tip body, ball), the
 //! static solve and the start of a run in [`crate::statics`], the linear algebra in
 //! [`crate::linalg`]. The Newton matrices live in the model ([`crate::newton::Workspace`]),
 //! not on the stack.
@@ -111,6 +114,29 @@ pub struct Impact<T> {
     pub stuck: bool,
 }
 
+/// How a step ended ([`StepReport::outcome`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Outcome {
+    /// Every Newton solve of the step reached the tolerance.
+    #[default]
+    Converged,
+    /// A Newton solve stopped at the work cap ([`crate::Integrator::max_work`]) and its
+    /// iterate was taken: the step is inexact (its `increment` says by how much, in the
+    /// tolerance's units).
+    Capped,
+    /// The model restarted itself after [`RESTART_AFTER`] failed or capped steps in a row
+    /// (this one included): at rest at the static equilibrium, the ball at its initial angle,
+    /// with the consistent acceleration of this step's input; the clock counts every sample.
+    Restarted,
+}
+
+/// Failed steps, or steps capped far from convergence, in a row after which a step restarts the
+/// model ([`Model::step`]).
+pub const RESTART_AFTER: u32 = 3;
+/// A capped step whose last Newton correction is at most this many tolerances is near
+/// convergence: it ends a run of failed steps instead of extending it ([`Model::step`]).
+pub const RESTART_INCREMENT: f64 = 100.0;
+
 /// What one step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepReport<T> {
@@ -124,6 +150,11 @@ pub struct StepReport<T> {
     pub separation: Option<T>,
     /// Landing on the track within the step, if any.
     pub landing: Option<crate::flight::Landing<T>>,
+    /// Work units the step used ([`crate::newton::work`]; at most
+    /// [`crate::Integrator::max_work`]).
+    pub work: u32,
+    /// Whether the step converged, was capped or restarted the model.
+    pub outcome: Outcome,
 }
 
 impl<T: Real> StepReport<T> {
@@ -149,6 +180,8 @@ impl<T: Real> StepReport<T> {
                 tangential_impulse: f(l.tangential_impulse),
                 bounced: l.bounced,
             }),
+            work: self.work,
+            outcome: self.outcome,
         }
     }
 }
@@ -175,6 +208,19 @@ pub struct Model<T: Real, S: Scene, const N: usize, const D: usize> {
     pub(crate) work: Workspace<T, D>,
     /// [`MAX_BASE_ACCEL`] in the scalar.
     max_input: T,
+    /// Failed or capped steps in a row, and restarts so far.
+    recovery: Recovery,
+}
+
+/// The restart rule's counters.
+#[derive(Clone, Copy, Debug, Default)]
+struct Recovery {
+    /// Failed or capped steps in a row.
+    run: u32,
+    /// Of those, failed steps (their samples did not advance the state).
+    kept: u32,
+    /// Restarts since the model was built.
+    restarts: u32,
 }
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
@@ -218,7 +264,54 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             },
             work: Workspace::default(),
             max_input: crate::scalar::lit(MAX_BASE_ACCEL),
+            recovery: Recovery::default(),
         })
+    }
+
+    /// Builds the model into caller storage, solves the static equilibrium and starts from it
+    /// at rest ([`Model::at_rest`]), without a copy of the model on the stack: a firmware keeps
+    /// it in a `static` (`MaybeUninit`) and its boot needs only the solve's own stack
+    /// (`docs/embedded.md`, boot RAM). On error `slot` holds a valid model or nothing usable:
+    /// use only the returned reference.
+    pub fn at_rest_in(
+        slot: &mut core::mem::MaybeUninit<Self>,
+        params: Params<T>,
+        base_accel: T,
+    ) -> Result<&mut Self, Error> {
+        let m = Self::new_in(slot, params)?;
+        m.solve_static()?;
+        m.restart(base_accel)?;
+        Ok(m)
+    }
+
+    /// [`Model::new`] into caller storage: only the fixed data is built on the stack, the
+    /// state and the Newton matrices are written in place.
+    pub fn new_in(
+        slot: &mut core::mem::MaybeUninit<Self>,
+        params: Params<T>,
+    ) -> Result<&mut Self, Error> {
+        #[allow(clippy::let_unit_value)]
+        let () = Self::CHECK;
+        params.validate(S::HAS_TIP, !matches!(S::BALL, BallKind::None))?;
+        let z = SVector::<T, D>::zeros();
+        let m = slot.write(Self {
+            sys: System::new(params),
+            state: State {
+                q: z,
+                v: z,
+                a: z,
+                pseudo_accel: z,
+                time: T::zero(),
+                steps: 0,
+                base_accel: T::zero(),
+                contact: Contact::Off,
+                flight: crate::flight::Flight::zero(),
+            },
+            work: Workspace::default(),
+            max_input: crate::scalar::lit(MAX_BASE_ACCEL),
+            recovery: Recovery::default(),
+        });
+        Ok(m)
     }
 
     /// The parameters.
@@ -259,7 +352,31 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             contact: Contact::Off,
             flight: crate::flight::Flight::zero(),
         };
+        self.prepare_rest();
         Ok(iterations)
+    }
+
+    /// Computes where a restart puts the model ([`crate::system::Rest`]): the start of [`Model::restart`] at
+    /// two inputs, 0 and 100 m/s², whose accelerations give `a₀` and `a₁`. Without a possible
+    /// start (the ball beyond a stop) the model has no restart state.
+    fn prepare_rest(&mut self) {
+        let angle = self.sys.params.ball.initial_angle;
+        let eq = self.sys.equilibrium;
+        let du: T = crate::scalar::lit(100.0);
+        let at = |m: &mut Self, u: T| {
+            let s = m
+                .sys
+                .start_state(eq, SVector::zeros(), Some(angle), u, &mut m.work);
+            m.work.clear();
+            s
+        };
+        self.sys.rest.ready = false;
+        if let (Ok(s0), Ok(s1)) = (at(self, T::zero()), at(self, du)) {
+            self.sys.rest.q = s0.q;
+            self.sys.rest.a0 = s0.a;
+            self.sys.rest.a1 = (s1.a - s0.a) / du;
+            self.sys.rest.ready = true;
+        }
     }
 
     /// Restarts the run at time 0 from the static equilibrium, at rest relative to the base, the
@@ -269,6 +386,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub fn restart(&mut self, base_accel: T) -> Result<(), Error> {
         self.check_input(base_accel)?;
         self.work.clear();
+        self.recovery.run = 0;
+        self.recovery.kept = 0;
         let angle = self.sys.params.ball.initial_angle;
         let s = self.sys.start_state(
             self.sys.equilibrium,
@@ -285,6 +404,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// Replaces the state (e.g. restored from storage). The caller vouches for consistency.
     pub fn set_state(&mut self, state: State<T, D>) {
         self.work.clear();
+        self.recovery.run = 0;
+        self.recovery.kept = 0;
         self.state = state;
     }
 
@@ -321,20 +442,117 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// Advances the model by one step `h` to the new input `base_accel` = ÿ_b(t + h) \[m/s²\]
     /// (the acceleration of the base, measured, positive up).
     ///
-    /// On error the state is left exactly as it was, and so is everything that influences
-    /// later steps (modified Newton's kept matrix included).
+    /// **Work.** The step does at most [`crate::Integrator::max_work`] units of work
+    /// ([`crate::newton::work`]). A Newton solve that reaches the cap stops with its iterate:
+    /// the step is taken and flagged [`Outcome::Capped`].
+    ///
+    /// **Errors.** On error the state is left exactly as it was, and so is everything that
+    /// influences later steps (modified Newton's kept matrix included). An input that is not
+    /// finite or out of range is refused before any work.
+    ///
+    /// **Recovery.** A step that fails or is capped while the [`RESTART_AFTER`] − 1 steps
+    /// before it failed or were capped too restarts the model instead: the state becomes the
+    /// start of [`Model::restart`] (static equilibrium, at rest, the ball at its initial
+    /// angle) with the consistent acceleration of this input, precomputed, so within the step's
+    /// work; the step count goes on as if every sample had been stepped; the step returns
+    /// `Ok` with [`Outcome::Restarted`]. So no run of failed or capped steps is longer than
+    /// `RESTART_AFTER`, whatever the input, and the next step is an ordinary one from rest.
     ///
     /// Never inlined: every caller (the firmware, the C API's five variants) runs the same
     /// code, whatever the optimizer decides around the call.
     #[inline(never)]
     pub fn step(&mut self, base_accel: T) -> Result<StepReport<T>, Error> {
         self.check_input(base_accel)?;
-        self.work.begin_step(self.sys.params.integrator.newton);
-        let report = self
+        let cap = self.sys.params.integrator.max_work;
+        self.work.begin_step(self.sys.params.integrator.newton, cap);
+        let result = self
             .sys
-            .advance(&mut self.state, base_accel, &mut self.work)?;
-        self.work.commit();
-        Ok(report)
+            .advance(&mut self.state, base_accel, &mut self.work);
+        let capped = self.work.capped();
+        match result {
+            Ok(mut report) => {
+                self.work.commit();
+                report.work = self.work.used();
+                if capped {
+                    report.outcome = Outcome::Capped;
+                }
+                // A step taken near convergence (converged, or capped within
+                // `RESTART_INCREMENT` tolerances) ends a run; one capped farther away extends it.
+                if self.work.capped_far() {
+                    self.recovery.run += 1;
+                    if self.recovery.run >= RESTART_AFTER {
+                        return Ok(self.recover(base_accel, report.work));
+                    }
+                } else {
+                    self.recovery.run = 0;
+                    self.recovery.kept = 0;
+                }
+                Ok(report)
+            }
+            Err(e) => {
+                self.recovery.run += 1;
+                self.recovery.kept += 1;
+                if self.recovery.run >= RESTART_AFTER {
+                    return Ok(self.recover(base_accel, self.work.used()));
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// Restarts the model at the step to the input `base_accel` (see [`Model::step`]); returns
+    /// the step's report. Without a restart state (a start that is not possible) the model
+    /// goes on from where it is. Kept out of line (rare): the step's frame does not carry the
+    /// new state.
+    #[inline(never)]
+    #[cold]
+    fn recover(&mut self, base_accel: T, work: u32) -> StepReport<T> {
+        let report = StepReport {
+            iterations: 0,
+            increment: T::zero(),
+            impact: None,
+            separation: None,
+            landing: None,
+            work,
+            outcome: Outcome::Restarted,
+        };
+        if !self.sys.rest.ready {
+            return report;
+        }
+        let r = &self.sys.rest;
+        let steps = self
+            .state
+            .steps
+            .saturating_add(u64::from(self.recovery.kept) + 1);
+        let mut a = r.a0;
+        a.axpy(base_accel, &r.a1, T::one());
+        self.state = State {
+            q: r.q,
+            v: SVector::zeros(),
+            a,
+            pseudo_accel: a,
+            time: T::from_count(steps) * self.sys.params.integrator.step,
+            steps,
+            base_accel,
+            contact: Contact::Off,
+            flight: crate::flight::Flight::zero(),
+        };
+        self.work.clear();
+        self.recovery.run = 0;
+        self.recovery.kept = 0;
+        self.recovery.restarts = self.recovery.restarts.saturating_add(1);
+        report
+    }
+
+    /// Restarts the model made itself since it was built ([`Model::step`], "Recovery").
+    pub fn restarts(&self) -> u32 {
+        self.recovery.restarts
+    }
+
+    /// The Newton workspace after the last step: its work units, whether it was capped, and
+    /// how many banded factorizations fell back to pivoting ([`Workspace::fallbacks`]).
+    pub fn workspace(&self) -> &Workspace<T, D> {
+        &self.work
     }
 }
 
@@ -350,6 +568,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     ) -> Result<StepReport<T>, Error> {
         let h = self.params.integrator.step;
         let start = &*state;
+        // 0. The work the step's event tests take whatever happens (no loop in them): the
+        //    flying ball's tests against the circle and the stops, the release test of a ball
+        //    on a stop (a residual); charged first, so that the solves have that much less.
+        ws.charge_fixed(match start.contact {
+            Contact::InFlight if S::FLIGHT => crate::newton::work::FLIGHT_TESTS,
+            Contact::OnStop(_) => crate::newton::work::RESIDUAL,
+            _ => 0,
+        });
         // 1. Newmark over the whole step (the ball keeps its contact, on the track or flying).
         let mut next = *start;
         let solved = self.newmark(
@@ -366,24 +592,50 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             impact: None,
             separation: None,
             landing: None,
+            work: 0,
+            outcome: Outcome::Converged,
         };
+        // An event the work cap cannot afford (a plastic landing's own matrix) leaves the state
+        // as the event code found it, consistent, and waits for the next step (`waits`).
         if S::FLIGHT && start.contact == Contact::InFlight {
             // 2'. In flight: a landing or a stop splits the step at the crossing.
-            self.flight_events(start, &mut next, base_accel, ws, &mut report)?;
+            let r = self.flight_events(start, &mut next, base_accel, ws, &mut report);
+            waits(ws, r)?;
         } else {
             // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
-            self.stop_events(start, &mut next, base_accel, ws, &mut report)?;
+            let r = self.stop_events(start, &mut next, base_accel, ws, &mut report);
+            waits(ws, r)?;
             // 3. Separation: a track that would pull the ball lets it fly.
             if self.flies() && report.impact.is_none() {
-                self.separation(start, &mut next, base_accel, ws, &mut report)?;
+                let r = self.separation(start, &mut next, base_accel, ws, &mut report);
+                waits(ws, r)?;
             }
         }
         // 4. The clock: whole steps times h (a running sum of h drifts in f32).
         next.steps = start.steps.saturating_add(1);
         next.time = T::from_count(next.steps) * h;
         Self::is_finite(&next)?;
+        if ws.capped() && self.params.integrator.at_cap == crate::params::AtCap::Keep {
+            // A capped step whose iterate is not to be taken: the state as before, an error.
+            return Err(Error::WorkCap);
+        }
         *state = next;
         Ok(report)
+    }
+}
+
+/// An event's result: one the work cap could not afford flags the step and waits for the next.
+#[inline(always)]
+fn waits<T: Real, const D: usize>(
+    ws: &mut Workspace<T, D>,
+    r: Result<(), Error>,
+) -> Result<(), Error> {
+    match r {
+        Err(Error::WorkCap) => {
+            ws.flag_capped();
+            Ok(())
+        }
+        r => r,
     }
 }
 

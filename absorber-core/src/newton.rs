@@ -15,6 +15,18 @@
 //!   they were built for the same step length and contact.
 //! - `Full`: every iteration refreshes (the paper's Newton–Raphson; the reference).
 //!
+//! **Work cap.** Every expensive operation of a step is counted in work units ([`work`]):
+//! an assembly with its factorization, a residual, a back-substitution, the pivoting fallback.
+//! Each is charged before it runs, against [`crate::Integrator::max_work`] for the whole step —
+//! every Newton solve of it (the Newmark solve, the sub-steps and consistent accelerations of
+//! an event, the impulse metrics), every damping trial. A Newton solve that cannot afford its
+//! next iteration stops with the iterate it has (the step is flagged [`crate::Outcome::Capped`];
+//! [`crate::model`] says what follows); a damping trial that cannot be afforded takes the
+//! trust-radius cap; an operation that cannot stop early (an impulse's solve, the fallback)
+//! fails with [`Error::WorkCap`]. The Newmark solves of a step leave [`work::RESERVE`] units
+//! to the events at its end. The work of a step is therefore at most `max_work` units,
+//! whatever the input: `docs/embedded.md` turns that into an instruction bound per firmware.
+//!
 //! **State invariants.** Factors built during a step go to a scratch slot; the slot that
 //! modified Newton keeps between steps is replaced only when the step succeeds
 //! ([`Workspace::commit`]), so a rejected sample leaves every later step bit for bit as if it
@@ -47,6 +59,46 @@ pub const SETTLE: f64 = 1e-4;
 /// A reused matrix whose correction contracted by less than this factor is refreshed at the
 /// next iteration (the correction itself is taken when it contracts by half).
 pub const SLOW: f64 = 0.25;
+
+/// Work units of the operations a step is made of ([`crate::Integrator::max_work`] caps their
+/// sum per step). The weights follow the operations' measured costs on a Cortex-M4F, each with
+/// the Newton iteration's own code around it (free ball, N = 3, `f32`: a back-substitution 468
+/// instructions, a residual 1,846 and about 400 for the iteration, an assembly with its banded
+/// factorization 6,992 and the same 400; `docs/embedded.md`), so that one unit is about 460
+/// instructions whatever the operation.
+pub mod work {
+    /// A back-substitution with the current factors.
+    pub const SOLVE: u32 = 1;
+    /// A residual of the equations of motion (a reused matrix's iteration, a damping trial).
+    pub const RESIDUAL: u32 = 5;
+    /// An assembly of the residual and the Newton matrix, and its banded factorization.
+    pub const REFRESH: u32 = 16;
+    /// The pivoting fallback on top of a refresh: the assembly again and the dense LU with
+    /// partial pivoting (`crate::linalg`). Only without a cap ([`UNLIMITED`]): under a cap a
+    /// matrix the banded LU refuses stops the solve at the cap instead.
+    pub const FALLBACK: u32 = 32;
+    /// Units the Newmark solves of a step leave to the events at its end: the back-substitutions
+    /// of a stop's and a landing's impulse in the trial's own factors (an event that needs a
+    /// matrix of its own, a plastic landing, charges it against the rest of the cap).
+    pub const RESERVE: u32 = 2 * SOLVE;
+    /// The event tests of a step that starts with the ball in flight (where the ball is
+    /// against the circle and the stops: square roots, arc tangents, cubic roots), charged
+    /// before the step's solves: about 1,900 instructions on the M4F.
+    pub const FLIGHT_TESTS: u32 = 4;
+    /// Units a split at an event's crossing needs beyond the trial step (a sub-step, the
+    /// impulse metric, the consistent acceleration and the rest of the step, each with a refresh
+    /// and a few iterations); a step that cannot afford it puts the event at its end.
+    pub const SPLIT: u32 = 4 * REFRESH + 8 * (RESIDUAL + SOLVE);
+    /// The firmware's cap with events at the step end (`docs/embedded.md`): what the paper's
+    /// free ball needs in its hardest step, so that its input is never capped, and no more.
+    pub const DEADLINE: u32 = 48;
+    /// The smallest cap a model accepts: the event tests of a step ([`FLIGHT_TESTS`] or a
+    /// ball's release test, a residual), one refreshed Newton iteration and the reserve.
+    pub const MIN_CAP: u32 = RESIDUAL + REFRESH + SOLVE + RESERVE;
+    /// No cap (the default): about the work the iteration limits alone allowed before the cap
+    /// existed (five solves of 100 iterations with 12 damping trials each).
+    pub const UNLIMITED: u32 = 50_000;
+}
 
 /// What a factored matrix was built for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,6 +133,19 @@ pub struct Workspace<T, const D: usize> {
     /// The static stiffness has no mass to lean on, and pivoting keeps its rounding floor
     /// where `f32` needs it (N = 16, very short beams).
     pivot: bool,
+    /// Work units charged in this step ([`work`]).
+    used: u32,
+    /// The cap of this step (`Integrator::max_work`; unlimited off the step path).
+    cap: u32,
+    /// A Newton solve of this step stopped at the cap.
+    capped: bool,
+    /// ... far from convergence: before any correction, or with a last correction above
+    /// [`crate::model::RESTART_INCREMENT`] tolerances (or an event had to wait).
+    far: bool,
+    /// Band factorizations of this step that fell back to pivoting.
+    fallbacks: u32,
+    /// Units the current Newton solve leaves to the events at the step's end.
+    reserve: u32,
 }
 
 impl<T: Real, const D: usize> Default for Workspace<T, D> {
@@ -97,6 +162,12 @@ impl<T: Real, const D: usize> Default for Workspace<T, D> {
             current: None,
             built: false,
             pivot: false,
+            used: 0,
+            cap: work::UNLIMITED,
+            capped: false,
+            far: false,
+            fallbacks: 0,
+            reserve: 0,
         }
     }
 }
@@ -111,10 +182,16 @@ impl<T: Real, const D: usize> Workspace<T, D> {
         self.built = false;
     }
 
-    /// Starts a step: modified Newton may reuse the kept factors, the others start afresh.
-    pub(crate) fn begin_step(&mut self, kind: NewtonKind) {
+    /// Starts a step with the work cap `cap`: modified Newton may reuse the kept factors, the
+    /// others start afresh.
+    pub(crate) fn begin_step(&mut self, kind: NewtonKind, cap: u32) {
         self.built = false;
         self.pivot = false;
+        self.used = 0;
+        self.cap = cap;
+        self.capped = false;
+        self.far = false;
+        self.fallbacks = 0;
         self.current = match kind {
             NewtonKind::Modified => Some(self.kept),
             NewtonKind::PerStep | NewtonKind::Full => None,
@@ -126,6 +203,89 @@ impl<T: Real, const D: usize> Workspace<T, D> {
         self.built = false;
         self.current = None;
         self.pivot = true;
+        self.used = 0;
+        self.cap = work::UNLIMITED;
+        self.capped = false;
+        self.far = false;
+    }
+
+    /// Work units charged in this step so far.
+    pub fn used(&self) -> u32 {
+        self.used
+    }
+
+    /// Whether a Newton solve of this step stopped at the cap.
+    pub fn capped(&self) -> bool {
+        self.capped
+    }
+
+    /// Whether one stopped far from convergence (or an event had to wait for the next step).
+    pub fn capped_far(&self) -> bool {
+        self.far
+    }
+
+    /// The cap of a solve that stopped after its last correction `increment` (none if `taken`
+    /// is false), with the tolerance `tol`. Kept out of line (rare): the Newton loop's frame
+    /// does not grow.
+    #[inline(never)]
+    #[cold]
+    fn stop_at_cap(&mut self, taken: bool, increment: T, tol: T) {
+        self.capped = true;
+        let near = increment <= tol * lit(crate::model::RESTART_INCREMENT);
+        if !taken || !near {
+            self.far = true;
+        }
+    }
+
+    /// Flags the step as capped (an event it could not afford waits for the next step).
+    pub(crate) fn flag_capped(&mut self) {
+        self.capped = true;
+        self.far = true;
+    }
+
+    /// Band factorizations of this step that fell back to pivoting.
+    pub fn fallbacks(&self) -> u32 {
+        self.fallbacks
+    }
+
+    /// Whether `units` more fit under the cap, keeping `reserve` units back.
+    #[inline]
+    pub(crate) fn affords(&self, units: u32, reserve: u32) -> bool {
+        self.used + units + reserve <= self.cap
+    }
+
+    /// Charges `units` of work that the step does whatever the cap (its event tests), before its
+    /// solves: they then have that much less.
+    #[inline]
+    pub(crate) fn charge_fixed(&mut self, units: u32) {
+        self.used += units;
+    }
+
+    /// Charges `units` if they fit under the cap (with nothing held back); `false` otherwise.
+    #[inline]
+    pub(crate) fn charge(&mut self, units: u32) -> bool {
+        if self.affords(units, 0) {
+            self.used += units;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Charges `units` for an event's test if the cap affords them; otherwise the test is not
+    /// made (the event code takes its cheaper branch) and the step is flagged capped.
+    pub(crate) fn afford_event(&mut self, units: u32) -> bool {
+        let ok = self.charge(units);
+        if !ok {
+            self.capped = true;
+        }
+        ok
+    }
+
+    /// Whether an event found at the end of the trial step can still afford being split at its
+    /// crossing ([`work::SPLIT`]); else it acts at the end of the step.
+    pub(crate) fn affords_split(&self) -> bool {
+        self.affords(work::SPLIT, 0)
     }
 
     /// The step succeeded: modified Newton keeps the newest factors.
@@ -152,8 +312,14 @@ impl<T: Real, const D: usize> Workspace<T, D> {
             .is_some_and(|k| k.contact == p.contact && k.c_q == p.ch.c_q)
     }
 
-    /// Solves `J dx = b` in place with the latest factors.
-    pub(crate) fn solve(&self, b: &mut SVector<T, D>) -> Result<(), Error> {
+    /// Solves `J dx = b` in place with the latest factors; charges [`work::SOLVE`] (an impulse's
+    /// solve that the cap cannot afford fails with [`Error::WorkCap`]). Not inlined: the work
+    /// bound counts its calls (`docs/embedded.md`).
+    #[inline(never)]
+    pub(crate) fn solve(&mut self, b: &mut SVector<T, D>) -> Result<(), Error> {
+        if !self.charge(work::SOLVE) {
+            return Err(Error::WorkCap);
+        }
         let f = self
             .current
             .and_then(|i| self.slots.get(i))
@@ -186,8 +352,18 @@ pub(crate) struct Solved<T, const D: usize> {
 }
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
+    /// Whether an event found at the end of the trial step acts there: events are put at the
+    /// step end ([`crate::EventLocation::StepEnd`]), or the step's work cap cannot afford a split
+    /// at the crossing ([`work::SPLIT`]).
+    #[inline]
+    pub(crate) fn event_at_end(&self, ws: &Workspace<T, D>) -> bool {
+        self.events_at_step_end() || !ws.affords_split()
+    }
+
     /// Assembles the residual and Newton matrix of `p` at `x` into the scratch slot, factors it
     /// (banded; partial pivoting when a pivot is too small) and makes it the current factors.
+    /// Charges [`work::REFRESH`] (and [`work::FALLBACK`] for the fallback): fails with
+    /// [`Error::WorkCap`] when the cap cannot afford them.
     pub(crate) fn refresh_at(
         &self,
         p: &Problem<'_, T, D>,
@@ -195,21 +371,37 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         ws: &mut Workspace<T, D>,
         r: &mut SVector<T, D>,
     ) -> Result<(), Error> {
+        if !ws.charge(work::REFRESH) {
+            return Err(Error::WorkCap);
+        }
         let i = ws.scratch();
         ws.current = Some(i);
         ws.built = true;
+        let pivot = ws.pivot;
         let slot = ws.slots.get_mut(i).ok_or(Error::Singular)?;
         slot.key = None;
         self.assemble_problem(p, qva, r, &mut slot.band);
-        slot.pivots = if ws.pivot {
-            Some(Self::pivot_fallback(slot)?)
-        } else if slot.band.factor(self.pivot_ratio) {
+        let banded = !pivot && slot.band.factor(self.pivot_ratio);
+        let pivots = if banded {
             None
         } else {
-            // The elimination gave up and destroyed the band: assemble it again.
-            self.assemble_problem(p, qva, r, &mut slot.band);
+            if !pivot {
+                // The elimination gave up and destroyed the band: assemble it again and pivot —
+                // not under a work cap, whose bound counts banded factorizations only (the
+                // dense LU's cost grows as D³): there the solve stops at the cap.
+                if ws.cap < work::UNLIMITED || !ws.charge(work::FALLBACK) {
+                    return Err(Error::WorkCap);
+                }
+                ws.fallbacks += 1;
+            }
+            let slot = ws.slots.get_mut(i).ok_or(Error::Singular)?;
+            if !pivot {
+                self.assemble_problem(p, qva, r, &mut slot.band);
+            }
             Some(Self::pivot_fallback(slot)?)
         };
+        let slot = ws.slots.get_mut(i).ok_or(Error::Singular)?;
+        slot.pivots = pivots;
         slot.key = Some(Key {
             c_q: p.ch.c_q,
             contact: p.contact,
@@ -242,7 +434,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// Newton on `x` (from the guess `x`) for problem `p`. Convergence:
     /// `max_i |c_pos Δx_i| / scale_i ≤ tolerance`. `kind` says whether factors may be reused
     /// (see the module doc). `step_solve`: a Newmark solve, which may accept its budget
-    /// ([`crate::Integrator::accept_after_budget`]).
+    /// ([`crate::Integrator::accept_after_budget`]) and leaves [`work::RESERVE`] units of the
+    /// step's cap to the events at its end. An iteration the cap cannot afford is not begun:
+    /// the solve returns the iterate it has and the step is flagged (module doc).
     pub(crate) fn newton(
         &self,
         p: &Problem<'_, T, D>,
@@ -253,21 +447,44 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     ) -> Result<Solved<T, D>, Error> {
         let max = self.params.integrator.max_iterations;
         let tol = self.params.integrator.tolerance;
+        ws.reserve = if step_solve { work::RESERVE } else { 0 };
         let half = lit::<T>(0.5);
         let mut increment = T::zero();
         let mut previous = T::zero();
         let mut refresh = false;
         let mut qva = [SVector::<T, D>::zeros(); 3];
         let mut dx = SVector::<T, D>::zeros();
+        // The iterations done when the cap stopped the solve (`u32::MAX`: it did not).
+        let mut stopped = u32::MAX;
         for it in 1..=max {
+            let can = kind != NewtonKind::Full && ws.can_reuse(p);
+            // Near the cap a refresh that cannot be afforded gives way to the factors in hand,
+            // whose correction is then taken if it contracts at all.
+            let fresh = !refresh && can;
+            let forced = !fresh && can && !ws.affords(work::REFRESH + work::SOLVE, ws.reserve);
+            let reuse = fresh || forced;
+            let cost = if reuse { work::RESIDUAL } else { work::REFRESH };
+            if !ws.affords(cost + work::SOLVE, ws.reserve) {
+                // The cap: the iterate so far stands, flagged.
+                ws.stop_at_cap(it > 1, increment, tol);
+                stopped = it - 1;
+                break;
+            }
             p.at(&x, &mut qva);
-            let reuse = !refresh && kind != NewtonKind::Full && ws.can_reuse(p);
+            let [q, v, a] = &qva;
             if reuse {
-                let [q, v, a] = &qva;
+                ws.used += work::RESIDUAL;
                 self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut dx);
             } else {
-                let [q, v, a] = &qva;
-                self.refresh_at(p, [q, v, a], ws, &mut dx)?;
+                match self.refresh_at(p, [q, v, a], ws, &mut dx) {
+                    // A matrix the banded LU refuses, under a work cap: the iterate so far.
+                    Err(Error::WorkCap) => {
+                        ws.stop_at_cap(false, increment, tol);
+                        stopped = it - 1;
+                        break;
+                    }
+                    r => r?,
+                }
             }
             if !dx.as_slice().iter().all(|z| z.is_finite()) {
                 return Err(Error::NonFiniteState);
@@ -275,7 +492,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             dx.neg_mut();
             ws.solve(&mut dx)?;
             let norm = self.scaled_norm(&dx, p.c_pos);
-            if reuse && it > 1 && norm > previous * half {
+            if forced && norm >= previous {
+                // The factors in hand do not contract and no others can be afforded: the cap.
+                ws.stop_at_cap(it > 1, previous, tol);
+                increment = previous;
+                stopped = it;
+                break;
+            }
+            if reuse && !forced && it > 1 && norm > previous * half {
                 // Not taken: the reused matrix no longer fits; refresh at the same iterate.
                 increment = norm;
                 refresh = true;
@@ -309,6 +533,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
             previous = norm;
         }
+        if stopped != u32::MAX {
+            return Ok(Solved {
+                x,
+                iterations: stopped,
+                increment,
+            });
+        }
         if self.params.integrator.accept_after_budget && step_solve {
             return Ok(Solved {
                 x,
@@ -335,6 +566,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// then converged by 5 % per iteration while the spin's target ran away, and Newton failed
     /// after 100 iterations where the undamped correction converges in 6 (docs/stability.md).
     ///
+    /// Each trial is a residual and a back-substitution charged to the step's work; a trial the
+    /// cap (less the solve's reserve) cannot afford is not made, and the trust-radius cap is
+    /// taken.
+    ///
     /// Not inlined: it runs only on violent steps, and inlined it would grow the stack frame
     /// and the code of every Newton iteration.
     #[inline(never)]
@@ -344,7 +579,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         x: &SVector<T, D>,
         dx: &SVector<T, D>,
         norm: T,
-        ws: &Workspace<T, D>,
+        ws: &mut Workspace<T, D>,
     ) -> T {
         let floor = self.max_step / norm;
         let (one, quarter) = (T::one(), lit::<T>(0.25));
@@ -352,12 +587,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let mut qva = [SVector::<T, D>::zeros(); 3];
         let mut bar = SVector::<T, D>::zeros();
         for _ in 0..DAMPING_TRIALS {
-            if lambda <= floor {
+            if lambda <= floor || !ws.affords(work::RESIDUAL + work::SOLVE, ws.reserve) {
                 break;
             }
-            let mut xt = *x;
-            xt.axpy(lambda, dx, one);
-            p.at(&xt, &mut qva);
+            ws.used += work::RESIDUAL;
+            // The trial point in `bar` (its residual overwrites it): no third vector here.
+            bar.copy_from(x);
+            bar.axpy(lambda, dx, one);
+            p.at(&bar, &mut qva);
             let [q, v, a] = &qva;
             self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut bar);
             if bar.as_slice().iter().all(|z| z.is_finite()) {

@@ -132,6 +132,30 @@ pub struct Integrator<T> {
     /// Where a stop impact of the rolling ball inside a step is put (the flight events, the
     /// ball leaving and landing on the track, always split the step at their crossing).
     pub events: EventLocation,
+    /// Hard cap on the work of one step, in work units ([`crate::newton::work`]: an assembly
+    /// with its factorization 16, a residual 5, a back-substitution 1), summed over every
+    /// solve of the step: the Newmark solve, an event's sub-steps, impulses and consistent
+    /// accelerations, the damping trials. A solve that reaches it stops with its iterate and
+    /// the step is flagged ([`crate::Outcome::Capped`]); repeated capped or failed steps make
+    /// the model restart itself ([`crate::Model::step`]). Default
+    /// [`work::UNLIMITED`](crate::newton::work::UNLIMITED) (the iteration limits alone);
+    /// firmware with a deadline per sample sets it with `events` (`docs/embedded.md`). At
+    /// least [`work::MIN_CAP`](crate::newton::work::MIN_CAP).
+    pub max_work: u32,
+    /// What a step whose Newton solve stopped at the work cap does ([`AtCap`]; default
+    /// `Take`: measured in `docs/accuracy.md`, "The work cap").
+    pub at_cap: AtCap,
+}
+
+/// What a step does when a Newton solve stops at the work cap ([`Integrator::at_cap`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AtCap {
+    /// Take the iterate: the step is taken, flagged [`crate::Outcome::Capped`] (inexact by its
+    /// report's `increment`). Default.
+    Take,
+    /// Keep the state: the step returns [`Error::WorkCap`] and the state is exactly as before
+    /// (the sample is lost, as after any failed step).
+    Keep,
 }
 
 /// Where an event inside a time step is put ([`Integrator::events`]): a stop impact, the
@@ -325,6 +349,8 @@ impl<T: Real> Default for Params<T> {
                 newton: NewtonKind::PerStep,
                 accept_after_budget: false,
                 events: EventLocation::Crossing,
+                max_work: crate::newton::work::UNLIMITED,
+                at_cap: AtCap::Take,
             },
             damping: Damping {
                 stiffness_proportional: T::zero(),
@@ -480,6 +506,13 @@ impl<T: Real> Params<T> {
             return Err(Error::InvalidParameter {
                 field: "integrator.max_iterations",
                 reason: "must be at least 1",
+            });
+        }
+        if i.max_work < crate::newton::work::MIN_CAP {
+            return Err(Error::InvalidParameter {
+                field: "integrator.max_work",
+                reason:
+                    "must afford the event tests, one refreshed Newton iteration and the reserve (24 units)",
             });
         }
         non_negative(

@@ -49,7 +49,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             Contact::Off => {
                 let alpha = self.relative_angle(next);
                 if alpha.abs() > self.params.ball.stop_angle {
-                    if self.events_at_step_end() {
+                    if self.event_at_end(ws) {
                         let side = Side::of(alpha);
                         self.impact_at_end(start, next, side, true, ws, report)?;
                     } else {
@@ -62,7 +62,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             Contact::Beyond if S::FLIGHT => {
                 let (a0, a1) = self.branch_angles(start, next);
                 if a1.abs() < self.params.ball.stop_angle {
-                    if self.events_at_step_end() {
+                    if self.event_at_end(ws) {
                         let side = Side::of(a0);
                         self.impact_at_end(start, next, side, false, ws, report)?;
                     } else {
@@ -259,7 +259,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         } else {
             Contact::Beyond
         };
-        if plastic && inside {
+        // (The stick test's residual is charged to the work cap; unaffordable, no test: the
+        // ball rebounds plastically and the step is flagged.)
+        if plastic && inside && ws.afford_event(crate::newton::work::RESIDUAL) {
             // Stay on the stop if the contact force is compressive. Tried on `s` itself (what
             // holding changes is saved and put back otherwise: no second state in the frame).
             let saved = (s.contact, s.a, s.pseudo_accel, Self::spin_of(s));

@@ -45,7 +45,23 @@ pub struct System<T: Real, S: Scene, const N: usize, const D: usize> {
     pub(crate) alpha: Option<crate::newmark::AlphaRecursion<T>>,
     /// What the scene adds: loads, per-element sections (`()` for the paper's scenes).
     pub(crate) data: S::Data<T, N>,
+    /// Where a restart puts the model (computed with the static equilibrium).
+    pub(crate) rest: Rest<T, D>,
     _scene: PhantomData<S>,
+}
+
+/// The state a restart puts the model in, precomputed off the step path: the configuration
+/// (static equilibrium, the ball at its initial angle), at rest, whose consistent acceleration
+/// is affine in the input, `a(ÿ_b) = a₀ + ÿ_b a₁` (at zero velocity the residual is linear in
+/// the acceleration and in the effective gravity `g + ÿ_b`), so that a restart costs a few
+/// vector operations, within any step's work.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rest<T, const D: usize> {
+    pub q: SVector<T, D>,
+    pub a0: SVector<T, D>,
+    pub a1: SVector<T, D>,
+    /// The map was computed (a start that is not possible has none: no restart then).
+    pub ready: bool,
 }
 
 /// What a Newton solve solves: `r(q₀ + c_q x, v₀ + c_v x, a₀ + c_m x) = 0` for `x`, at
@@ -129,6 +145,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             },
             slow: lit(crate::newton::SLOW),
             alpha: crate::newmark::AlphaRecursion::of(&params.integrator),
+            rest: Rest {
+                q: SVector::zeros(),
+                a0: SVector::zeros(),
+                a1: SVector::zeros(),
+                ready: false,
+            },
             _scene: PhantomData,
         }
     }
@@ -182,7 +204,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// Residual of the equations of motion at `(q, v, a)` into `r` (overwritten); returns the
-    /// generalized contact force on the ball along θ.
+    /// generalized contact force on the ball along θ. Not inlined: the work bound counts its
+    /// calls (`docs/embedded.md`).
+    #[inline(never)]
     pub(crate) fn residual(
         &self,
         qva: [&SVector<T, D>; 3],

@@ -51,27 +51,27 @@
 /**
  * Storage for `ABSORBER_VARIANT_FREE_N3_F32` \[bytes\] (upper bound for every target).
  */
-#define ABSORBER_MODEL_SIZE_FREE_N3_F32 4608
+#define ABSORBER_MODEL_SIZE_FREE_N3_F32 4864
 
 /**
  * Storage for `ABSORBER_VARIANT_LOCKED_N3_F32` \[bytes\].
  */
-#define ABSORBER_MODEL_SIZE_LOCKED_N3_F32 4352
+#define ABSORBER_MODEL_SIZE_LOCKED_N3_F32 4480
 
 /**
  * Storage for `ABSORBER_VARIANT_BEAM_N3_F32` \[bytes\].
  */
-#define ABSORBER_MODEL_SIZE_BEAM_N3_F32 4352
+#define ABSORBER_MODEL_SIZE_BEAM_N3_F32 4480
 
 /**
  * Storage for `ABSORBER_VARIANT_FREE_N6_F32` \[bytes\].
  */
-#define ABSORBER_MODEL_SIZE_FREE_N6_F32 10496
+#define ABSORBER_MODEL_SIZE_FREE_N6_F32 10752
 
 /**
  * Storage for `ABSORBER_VARIANT_FREE_N3_F64` \[bytes\].
  */
-#define ABSORBER_MODEL_SIZE_FREE_N3_F64 8960
+#define ABSORBER_MODEL_SIZE_FREE_N3_F64 9344
 
 /**
  * Largest number of unknowns D of any variant (the length of the state vectors).
@@ -124,6 +124,44 @@
  * worst step under twice the mean; late by less than a step).
  */
 #define ABSORBER_EVENTS_STEP_END 1
+
+/**
+ * `integrator.max_work`: no cap beyond the iteration limits (default).
+ */
+#define ABSORBER_WORK_UNLIMITED 50000
+
+/**
+ * `integrator.max_work`: the firmware's cap (`absorber_core::newton::work::DEADLINE`): with
+ * `ABSORBER_EVENTS_STEP_END`, no step of the free ball costs more than twice the mean
+ * (`docs/embedded.md`).
+ */
+#define ABSORBER_WORK_DEADLINE 48
+
+/**
+ * `at_cap`: a step whose Newton solve reached the work cap takes its iterate (flagged
+ * `ABSORBER_OUTCOME_CAPPED`; default).
+ */
+#define ABSORBER_AT_CAP_TAKE 0
+
+/**
+ * `at_cap`: such a step fails with `ABSORBER_STATUS_WORK_CAP`, the state kept.
+ */
+#define ABSORBER_AT_CAP_KEEP 1
+
+/**
+ * [`AbsorberReport::outcome`]: every Newton solve of the step converged.
+ */
+#define ABSORBER_OUTCOME_CONVERGED 0
+
+/**
+ * [`AbsorberReport::outcome`]: a Newton solve stopped at the work cap (the step was taken).
+ */
+#define ABSORBER_OUTCOME_CAPPED 1
+
+/**
+ * [`AbsorberReport::outcome`]: the model restarted itself at rest.
+ */
+#define ABSORBER_OUTCOME_RESTARTED 2
 
 /**
  * `threshold_rule` of the monitor: cycles at or below the CAFT do no damage (default).
@@ -210,6 +248,10 @@ typedef enum AbsorberStatus {
      * An error of the core this version of the API does not know.
      */
     ABSORBER_STATUS_OTHER = 13,
+    /**
+     * The step's work cap was reached by an operation that cannot stop early; state unchanged.
+     */
+    ABSORBER_STATUS_WORK_CAP = 14,
 } AbsorberStatus;
 
 /**
@@ -430,6 +472,19 @@ typedef struct AbsorberParams {
      * Coefficient of normal restitution of a landing on the track \[-\] (default 0.5).
      */
     double landing_restitution;
+    /**
+     * Hard cap on the work of one step in work units (`absorber_core::newton::work`: an
+     * assembly with its factorization 16, a residual 5, a back-substitution 1; at least 24).
+     * A step that reaches it is taken with its iterate and flagged (`ABSORBER_OUTCOME_CAPPED`);
+     * default `ABSORBER_WORK_UNLIMITED`. A firmware with a deadline per sample sets
+     * `ABSORBER_WORK_DEADLINE` with `ABSORBER_EVENTS_STEP_END` (`docs/embedded.md`).
+     */
+    uint32_t max_work;
+    /**
+     * `ABSORBER_AT_CAP_TAKE` (default) or `ABSORBER_AT_CAP_KEEP`: what a step whose Newton
+     * solve reached the cap does (`absorber_core::AtCap`).
+     */
+    uint32_t at_cap;
 } AbsorberParams;
 
 /**
@@ -520,6 +575,16 @@ typedef struct AbsorberReport_f32 {
      * Tangential impulse of the track on the ball \[N·s\].
      */
     float landing_tangential_impulse;
+    /**
+     * Work units the step used (at most `integrator.max_work`).
+     */
+    uint32_t work;
+    /**
+     * `ABSORBER_OUTCOME_CONVERGED`, `_CAPPED` (a Newton solve stopped at the work cap; the
+     * step was taken, inexact) or `_RESTARTED` (the model restarted itself at rest after
+     * failed or capped steps in a row).
+     */
+    uint32_t outcome;
 } AbsorberReport_f32;
 
 /**
@@ -596,6 +661,16 @@ typedef struct AbsorberReport_f64 {
      * Tangential impulse of the track on the ball \[N·s\].
      */
     double landing_tangential_impulse;
+    /**
+     * Work units the step used (at most `integrator.max_work`).
+     */
+    uint32_t work;
+    /**
+     * `ABSORBER_OUTCOME_CONVERGED`, `_CAPPED` (a Newton solve stopped at the work cap; the
+     * step was taken, inexact) or `_RESTARTED` (the model restarted itself at rest after
+     * failed or capped steps in a row).
+     */
+    uint32_t outcome;
 } AbsorberReport_f64;
 
 /**

@@ -92,8 +92,8 @@ use absorber_core::monitor::{
 };
 use absorber_core::scalar::{lit, Real};
 use absorber_core::{
-    Contact, Error, EventLocation, Impact, ImpactModel, Model, NewtonKind, Params, Scene, Side,
-    StepReport,
+    AtCap, Contact, Error, EventLocation, Impact, ImpactModel, Model, NewtonKind, Outcome, Params,
+    Scene, Side, StepReport,
 };
 use core::ffi::{c_char, c_void};
 use core::mem::{align_of, size_of};
@@ -134,15 +134,15 @@ pub const ABSORBER_VARIANT_FREE_N3_F64: u32 = 5;
 /// Alignment of model and monitor storage \[bytes\].
 pub const ABSORBER_MODEL_ALIGN: usize = 8;
 /// Storage for `ABSORBER_VARIANT_FREE_N3_F32` \[bytes\] (upper bound for every target).
-pub const ABSORBER_MODEL_SIZE_FREE_N3_F32: usize = 4608;
+pub const ABSORBER_MODEL_SIZE_FREE_N3_F32: usize = 4864;
 /// Storage for `ABSORBER_VARIANT_LOCKED_N3_F32` \[bytes\].
-pub const ABSORBER_MODEL_SIZE_LOCKED_N3_F32: usize = 4352;
+pub const ABSORBER_MODEL_SIZE_LOCKED_N3_F32: usize = 4480;
 /// Storage for `ABSORBER_VARIANT_BEAM_N3_F32` \[bytes\].
-pub const ABSORBER_MODEL_SIZE_BEAM_N3_F32: usize = 4352;
+pub const ABSORBER_MODEL_SIZE_BEAM_N3_F32: usize = 4480;
 /// Storage for `ABSORBER_VARIANT_FREE_N6_F32` \[bytes\].
-pub const ABSORBER_MODEL_SIZE_FREE_N6_F32: usize = 10496;
+pub const ABSORBER_MODEL_SIZE_FREE_N6_F32: usize = 10752;
 /// Storage for `ABSORBER_VARIANT_FREE_N3_F64` \[bytes\].
-pub const ABSORBER_MODEL_SIZE_FREE_N3_F64: usize = 8960;
+pub const ABSORBER_MODEL_SIZE_FREE_N3_F64: usize = 9344;
 /// Largest number of unknowns D of any variant (the length of the state vectors).
 pub const ABSORBER_MAX_DOFS: usize = 25;
 /// Storage for a `float` monitor \[bytes\] (rainflow residue 128, impacts 16, window 256 blocks).
@@ -166,6 +166,23 @@ pub const ABSORBER_EVENTS_CROSSING: u32 = 0;
 /// `integrator.events`: every event is put at the end of its step (bounded cost per sample:
 /// worst step under twice the mean; late by less than a step).
 pub const ABSORBER_EVENTS_STEP_END: u32 = 1;
+/// `integrator.max_work`: no cap beyond the iteration limits (default).
+pub const ABSORBER_WORK_UNLIMITED: u32 = 50_000;
+/// `integrator.max_work`: the firmware's cap (`absorber_core::newton::work::DEADLINE`): with
+/// `ABSORBER_EVENTS_STEP_END`, no step of the free ball costs more than twice the mean
+/// (`docs/embedded.md`).
+pub const ABSORBER_WORK_DEADLINE: u32 = 48;
+/// `at_cap`: a step whose Newton solve reached the work cap takes its iterate (flagged
+/// `ABSORBER_OUTCOME_CAPPED`; default).
+pub const ABSORBER_AT_CAP_TAKE: u32 = 0;
+/// `at_cap`: such a step fails with `ABSORBER_STATUS_WORK_CAP`, the state kept.
+pub const ABSORBER_AT_CAP_KEEP: u32 = 1;
+/// [`AbsorberReport::outcome`]: every Newton solve of the step converged.
+pub const ABSORBER_OUTCOME_CONVERGED: u32 = 0;
+/// [`AbsorberReport::outcome`]: a Newton solve stopped at the work cap (the step was taken).
+pub const ABSORBER_OUTCOME_CAPPED: u32 = 1;
+/// [`AbsorberReport::outcome`]: the model restarted itself at rest.
+pub const ABSORBER_OUTCOME_RESTARTED: u32 = 2;
 /// `threshold_rule` of the monitor: cycles at or below the CAFT do no damage (default).
 pub const ABSORBER_THRESHOLD_CUTOFF: u32 = 0;
 /// `threshold_rule`: the S–N line continues below the CAFT.
@@ -194,6 +211,9 @@ const _: () = {
     assert!(align_of::<Slot<Monitor<f32>>>() <= ABSORBER_MODEL_ALIGN);
     assert!(align_of::<Slot<Monitor<f64>>>() <= ABSORBER_MODEL_ALIGN);
     assert!(FreeN6F32::DOFS <= ABSORBER_MAX_DOFS);
+    // The header's literals are the core's constants.
+    assert!(ABSORBER_WORK_UNLIMITED == absorber_core::newton::work::UNLIMITED);
+    assert!(ABSORBER_WORK_DEADLINE == absorber_core::newton::work::DEADLINE);
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -231,6 +251,8 @@ pub enum AbsorberStatus {
     BufferTooSmall = 12,
     /// An error of the core this version of the API does not know.
     Other = 13,
+    /// The step's work cap was reached by an operation that cannot stop early; state unchanged.
+    WorkCap = 14,
 }
 
 /// Details of a failed [`absorber_init`] or [`absorber_monitor_init`].
@@ -372,6 +394,15 @@ pub struct AbsorberParams {
     pub flight: u32,
     /// Coefficient of normal restitution of a landing on the track \[-\] (default 0.5).
     pub landing_restitution: f64,
+    /// Hard cap on the work of one step in work units (`absorber_core::newton::work`: an
+    /// assembly with its factorization 16, a residual 5, a back-substitution 1; at least 24).
+    /// A step that reaches it is taken with its iterate and flagged (`ABSORBER_OUTCOME_CAPPED`);
+    /// default `ABSORBER_WORK_UNLIMITED`. A firmware with a deadline per sample sets
+    /// `ABSORBER_WORK_DEADLINE` with `ABSORBER_EVENTS_STEP_END` (`docs/embedded.md`).
+    pub max_work: u32,
+    /// `ABSORBER_AT_CAP_TAKE` (default) or `ABSORBER_AT_CAP_KEEP`: what a step whose Newton
+    /// solve reached the cap does (`absorber_core::AtCap`).
+    pub at_cap: u32,
 }
 
 /// Opaque model: a pointer into the caller's storage, made by [`absorber_init`].
@@ -421,6 +452,12 @@ pub struct AbsorberReport<T> {
     pub landing_normal_impulse: T,
     /// Tangential impulse of the track on the ball \[N·s\].
     pub landing_tangential_impulse: T,
+    /// Work units the step used (at most `integrator.max_work`).
+    pub work: u32,
+    /// `ABSORBER_OUTCOME_CONVERGED`, `_CAPPED` (a Newton solve stopped at the work cap; the
+    /// step was taken, inexact) or `_RESTARTED` (the model restarted itself at rest after
+    /// failed or capped steps in a row).
+    pub outcome: u32,
 }
 
 /// Step report of a `float` model.
@@ -885,6 +922,7 @@ fn status_of(e: &Error) -> AbsorberStatus {
         Error::NoConvergence { .. } => AbsorberStatus::NoConvergence,
         Error::NonFiniteState => AbsorberStatus::NonFiniteState,
         Error::Singular => AbsorberStatus::Singular,
+        Error::WorkCap => AbsorberStatus::WorkCap,
         _ => AbsorberStatus::Other,
     }
 }
@@ -936,6 +974,7 @@ unsafe fn fail_core(error: *mut AbsorberError, e: &Error) -> AbsorberStatus {
         Error::NoConvergence { .. } => ("", "Newton did not converge"),
         Error::NonFiniteState => ("", "state became non-finite"),
         Error::Singular => ("", "singular system matrix"),
+        Error::WorkCap => ("", "the step's work cap was reached"),
         _ => ("", "error"),
     };
     // SAFETY: forwarded from the caller.
@@ -1027,6 +1066,17 @@ fn to_params<T: Real>(p: &AbsorberParams) -> Result<Params<T>, Error> {
         _ => return Err(invalid("flight", "must be 0 or 1")),
     };
     q.ball.landing_restitution = lit(p.landing_restitution);
+    q.integrator.max_work = p.max_work;
+    q.integrator.at_cap = match p.at_cap {
+        ABSORBER_AT_CAP_TAKE => AtCap::Take,
+        ABSORBER_AT_CAP_KEEP => AtCap::Keep,
+        _ => {
+            return Err(invalid(
+                "at_cap",
+                "must be ABSORBER_AT_CAP_TAKE or ABSORBER_AT_CAP_KEEP",
+            ))
+        }
+    };
     Ok(q)
 }
 
@@ -1150,6 +1200,11 @@ pub unsafe extern "C" fn absorber_params_default(params: *mut AbsorberParams) ->
         },
         flight: u32::from(d.ball.flight),
         landing_restitution: d.ball.landing_restitution,
+        max_work: d.integrator.max_work,
+        at_cap: match d.integrator.at_cap {
+            AtCap::Take => ABSORBER_AT_CAP_TAKE,
+            AtCap::Keep => ABSORBER_AT_CAP_KEEP,
+        },
     };
     // SAFETY: non-null, valid for writes by the caller's guarantee.
     unsafe { params.write(p) };
@@ -1298,6 +1353,7 @@ pub extern "C" fn absorber_status_name(status: AbsorberStatus) -> *const c_char 
         AbsorberStatus::NotInitialized => c"not initialized",
         AbsorberStatus::BufferTooSmall => c"buffer too small",
         AbsorberStatus::Other => c"other error",
+        AbsorberStatus::WorkCap => c"work cap reached",
     };
     s.as_ptr()
 }
@@ -1331,6 +1387,12 @@ fn report_of<T: Real>(r: &StepReport<T>) -> AbsorberReport<T> {
         impact_relative_speed: z,
         impact_impulse: z,
         impact_energy_loss: z,
+        work: r.work,
+        outcome: match r.outcome {
+            Outcome::Converged => ABSORBER_OUTCOME_CONVERGED,
+            Outcome::Capped => ABSORBER_OUTCOME_CAPPED,
+            Outcome::Restarted => ABSORBER_OUTCOME_RESTARTED,
+        },
     };
     if let Some(i) = &r.impact {
         out.impact = 1;
@@ -1847,6 +1909,12 @@ unsafe fn monitor_record<T: Scalar>(
             tangential_impulse: r.landing_tangential_impulse,
             bounced: r.landing == 1,
         }),
+        work: r.work,
+        outcome: match r.outcome {
+            ABSORBER_OUTCOME_CAPPED => Outcome::Capped,
+            ABSORBER_OUTCOME_RESTARTED => Outcome::Restarted,
+            _ => Outcome::Converged,
+        },
     };
     match m.record(mon, &rep, base_accel) {
         Ok(s) => {

@@ -5,7 +5,7 @@
 
 use absorber_core::{FreeBallModel, Params};
 use absorber_ffi::*;
-use absorber_firmware::{base_accel, Fnv, NoProbe, Sim, WithMonitor, STEPS, STEP_MS};
+use absorber_firmware::{base_accel, Fnv, NoProbe, Setup, Sim, WithMonitor, STEPS, STEP_MS};
 use core::ffi::{c_void, CStr};
 use core::ptr::{null, null_mut};
 
@@ -34,6 +34,15 @@ fn defaults() -> AbsorberParams {
     );
     // SAFETY: written above.
     unsafe { p.assume_init() }
+}
+
+/// The firmware's parameters (`absorber_firmware::firmware_params`): the defaults with every
+/// event at the step end and the deadline's work cap.
+fn firmware() -> AbsorberParams {
+    let mut p = defaults();
+    p.integrator.events = ABSORBER_EVENTS_STEP_END;
+    p.max_work = ABSORBER_WORK_DEADLINE;
+    p
 }
 
 /// Builds `variant` in `st`; returns the status, the handle and the error.
@@ -78,6 +87,8 @@ fn fingerprint(model: *mut AbsorberModel, monitor: Option<*mut AbsorberMonitor>)
         if s == AbsorberStatus::Ok {
             hash.word(r.iterations);
             hash.word(r.increment.to_bits());
+            hash.word(r.work);
+            hash.word(r.outcome);
             if r.impact != 0 {
                 for w in [
                     r.impact_time,
@@ -182,13 +193,13 @@ fn fingerprint(model: *mut AbsorberModel, monitor: Option<*mut AbsorberMonitor>)
 fn firmware_hash<M: Sim>() -> u64 {
     let mut m = M::init().expect("the scene starts");
     let mut out = String::new();
-    absorber_firmware::run(&mut m, &mut out, &mut NoProbe).hash
+    absorber_firmware::run(&mut m, &Setup::default(), &mut out, &mut NoProbe).hash
 }
 
 #[test]
 fn free_ball_through_the_c_api_reproduces_the_fw_free_fingerprint_bit_for_bit() {
     let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
-    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &defaults());
+    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &firmware());
     assert_eq!(s, AbsorberStatus::Ok);
     let reference = firmware_hash::<FreeBallModel<f32, 3, 13>>();
     assert_eq!(fingerprint(m, None), reference);
@@ -197,12 +208,12 @@ fn free_ball_through_the_c_api_reproduces_the_fw_free_fingerprint_bit_for_bit() 
 #[test]
 fn locked_and_beam_variants_reproduce_their_firmware_fingerprints() {
     let mut st = storage::<ABSORBER_MODEL_SIZE_LOCKED_N3_F32>();
-    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_LOCKED_N3_F32, &defaults());
+    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_LOCKED_N3_F32, &firmware());
     assert_eq!(s, AbsorberStatus::Ok);
     let reference = firmware_hash::<absorber_core::LockedBallModel<f32, 3, 12>>();
     assert_eq!(fingerprint(m, None), reference);
     let mut st = storage::<ABSORBER_MODEL_SIZE_BEAM_N3_F32>();
-    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_BEAM_N3_F32, &defaults());
+    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_BEAM_N3_F32, &firmware());
     assert_eq!(s, AbsorberStatus::Ok);
     let reference = firmware_hash::<absorber_core::BeamModel<f32, 3, 12>>();
     assert_eq!(fingerprint(m, None), reference);
@@ -211,7 +222,7 @@ fn locked_and_beam_variants_reproduce_their_firmware_fingerprints() {
 #[test]
 fn monitor_through_the_c_api_reproduces_the_fw_free_monitor_fingerprint() {
     let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
-    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &defaults());
+    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &firmware());
     assert_eq!(s, AbsorberStatus::Ok);
     let mut ms = storage::<ABSORBER_MONITOR_SIZE_F32>();
     let mut mon = null_mut();
@@ -356,6 +367,14 @@ fn a_bad_parameter_is_refused_with_the_name_of_its_field() {
     p.integrator.events = 2;
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "integrator.events");
+    let mut p = defaults();
+    p.max_work = 10;
+    let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
+    assert_eq!(text(&e.field), "integrator.max_work");
+    let mut p = defaults();
+    p.at_cap = 2;
+    let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
+    assert_eq!(text(&e.field), "at_cap");
     // The beam-only scene does not validate the ball (as the core).
     let mut p = defaults();
     p.ball.mass = -1.0;
@@ -366,6 +385,39 @@ fn a_bad_parameter_is_refused_with_the_name_of_its_field() {
     );
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "ball.mass");
+}
+
+/// The work cap through the C API: under noise over the whole input range every step's report
+/// stays within `max_work`, flags its outcome, and a capped step with `ABSORBER_AT_CAP_KEEP`
+/// returns `ABSORBER_STATUS_WORK_CAP` with the state as it was.
+#[test]
+fn the_work_cap_and_its_outcomes_reach_the_c_api() {
+    let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
+    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &firmware());
+    assert_eq!(s, AbsorberStatus::Ok);
+    let mut seed = 0x1234_5678u32;
+    let mut outcomes = [0u32; 3];
+    for _ in 0..500 {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        let a = ((seed >> 8) as f32 / 8_388_608.0 - 1.0) * 1.0e4;
+        let mut r = AbsorberReportF32::default();
+        // SAFETY: live handle, valid report.
+        if unsafe { absorber_step_f32(m, a, &mut r) } == AbsorberStatus::Ok {
+            assert!(r.work <= ABSORBER_WORK_DEADLINE, "{}", r.work);
+            outcomes[r.outcome as usize] += 1;
+        }
+    }
+    assert!(outcomes[1] > 0 && outcomes[2] > 0, "{outcomes:?}");
+    let mut p = firmware();
+    p.at_cap = ABSORBER_AT_CAP_KEEP;
+    let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
+    let (_, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
+    let mut r = AbsorberReportF32::default();
+    // SAFETY: live handle, valid report.
+    let s = unsafe { absorber_step_f32(m, 5000.0, &mut r) };
+    assert_eq!(s, AbsorberStatus::WorkCap);
 }
 
 #[test]

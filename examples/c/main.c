@@ -115,6 +115,8 @@ static struct summary run(AbsorberModel *m, AbsorberMonitor *mon, float h)
             s.iterations += r.iterations;
             word(r.iterations);
             word(bits(r.increment));
+            word(r.work);
+            word(r.outcome);
             if (r.impact) {
                 s.impacts++;
                 word(bits(r.impact_time));
@@ -225,6 +227,10 @@ int main(void)
 
     AbsorberParams p;
     absorber_params_default(&p);
+    /* The firmware's defaults (docs/embedded.md): every event at the end of its step, and the
+       work cap that bounds every step to twice the mean. */
+    p.integrator.events = ABSORBER_EVENTS_STEP_END;
+    p.max_work = ABSORBER_WORK_DEADLINE;
     const float h = (float)p.integrator.step;
     AbsorberModel *m;
     AbsorberError err;

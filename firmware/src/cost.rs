@@ -8,7 +8,8 @@
 //! modified`, `budget=K` (exactly K iterations, the iterate accepted), `seconds=` (simulated),
 //! `frequency=` \[Hz\], `amplitude=` \[m\] (harmonic base motion, the paper scene's by default),
 //! `bending=`, `axial=`, `lumping=` (`absorber_core::Calibration`; identity by default),
-//! `events=crossing|step-end` (`absorber_core::EventLocation`).
+//! `events=crossing|step-end` (`absorber_core::EventLocation`), `work=` (`Integrator::max_work`, work
+//! units; unlimited by default).
 //! Unknown keys and bad values are errors (exit 4), never ignored.
 //!
 //! Every step goes through [`cost_step`], never inlined, one symbol for every variant, so the
@@ -40,6 +41,7 @@ pub struct Config {
     amplitude: f64,
     calibration: [f64; 3],
     events: EventLocation,
+    max_work: u32,
 }
 
 impl Default for Config {
@@ -61,6 +63,7 @@ impl Default for Config {
             amplitude: 0.5e-3,
             calibration: [1.0, 1.0, 0.0],
             events: p.integrator.events,
+            max_work: p.integrator.max_work,
         }
     }
 }
@@ -125,6 +128,7 @@ impl Config {
                     _ => return Err(key),
                 }
             }
+            "work" => self.max_work = value.parse().ok().ok_or(key)?,
             _ => return Err(key),
         }
         Ok(())
@@ -139,6 +143,7 @@ impl Config {
         i.tolerance = lit(self.tolerance);
         i.newton = self.newton;
         i.events = self.events;
+        i.max_work = self.max_work;
         if let Some(k) = self.budget {
             i.max_iterations = k;
             i.accept_after_budget = true;

@@ -47,6 +47,7 @@ fn params() -> Params<f32> {
     p.integrator.alpha_f = alpha_f;
     p.integrator.step = step;
     p.integrator.tolerance = tolerance;
+    p.integrator.max_work = 25; // the hardest step of this run takes 23 units (docs/embedded.md)
     let [c, factor, gravity] = g::DAMPING_CALIBRATION_GRAVITY;
     p.damping.stiffness_proportional = c;
     p.calibration.bending_stiffness = factor;
@@ -120,6 +121,10 @@ impl Sim for EstimatorSim {
 
     fn h(&self) -> f32 {
         self.est.model().params().integrator.step
+    }
+
+    fn work_cap(&self) -> u32 {
+        self.est.model().params().integrator.max_work
     }
 
     fn tip(&self) -> f32 {

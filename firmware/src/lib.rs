@@ -25,8 +25,10 @@
 #![cfg_attr(target_os = "none", no_std)]
 
 use absorber_core::monitor::{Monitor, MonitorConfig, NoTwin};
-use absorber_core::{Error, Model, Params, Scene, StepReport};
+use absorber_core::{Error, EventLocation, Model, Outcome, Params, Scene, StepReport};
 use core::fmt::{self, Write};
+use core::mem::MaybeUninit;
+pub use stress::Setup;
 
 /// Excitation amplitude A \[m\] (the paper's free-ball run).
 pub const AMPLITUDE: f32 = 0.5e-3;
@@ -48,12 +50,38 @@ pub fn base_accel(k: u32, h: f32, frequency: f32) -> f32 {
     -AMPLITUDE * omega * omega * libm::sinf(omega * t)
 }
 
+/// The firmware's parameters: `Params::default()` (the paper's Table 1) with every event at
+/// the end of its step and the work cap for a deadline per sample (`docs/embedded.md`,
+/// "Firmware defaults": the choice measured), and a stress scene's restitution.
+pub fn firmware_params(setup: &Setup) -> Params<f32> {
+    let mut p = Params::<f32>::default();
+    p.integrator.events = EventLocation::StepEnd;
+    p.integrator.max_work = absorber_core::newton::work::DEADLINE;
+    if let Some(e) = setup.stress.and_then(|s| s.restitution) {
+        p.ball.restitution = e;
+        p.ball.landing_restitution = e;
+    }
+    p
+}
+
 /// What the driver needs from a scene.
 pub trait Sim: Sized {
     /// Scene name as printed.
     fn name() -> &'static str;
-    /// Builds the scene from `Params::default()` at static equilibrium, at rest, input 0.
+    /// Builds the scene at static equilibrium, at rest, input 0 (by value).
     fn init() -> Result<Self, Error>;
+    /// Builds the scene for `setup` into `slot` (a `static` on the target), in place where the
+    /// scene can: its boot then needs no copy of it on the stack (`docs/embedded.md`, boot RAM).
+    fn init_in<'a>(slot: &'a mut MaybeUninit<Self>, setup: &Setup) -> Result<&'a mut Self, Error> {
+        let _ = setup;
+        Ok(slot.write(Self::init()?))
+    }
+    /// Throws the ball along its track at the relative angular speed `rate` \[rad/s\] (a
+    /// stress scene's start; nothing without a free ball).
+    fn spin_start(&mut self, rate: f32) -> Result<(), Error> {
+        let _ = rate;
+        Ok(())
+    }
     /// One model step to the new base acceleration. Never inlined: its instructions are counted.
     fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error>;
     /// Time step h \[s\].
@@ -68,6 +96,11 @@ pub trait Sim: Sized {
     fn state_words(&self, f: &mut dyn FnMut(u32));
     /// Extra figures printed at every whole second, each also fed to `f` (none by default).
     fn second(&self, _out: &mut dyn Write, _f: &mut dyn FnMut(u32)) {}
+    /// The scene's work cap per step (`Integrator::max_work`, work units), printed with the
+    /// units' weights for the static work bound (`scripts/embedded-report.py`); 0 if unknown.
+    fn work_cap(&self) -> u32 {
+        0
+    }
     /// Excitation frequency \[Hz\] ([`FREQUENCY_HZ`] unless a scene drives at another).
     fn frequency() -> f32 {
         FREQUENCY_HZ
@@ -80,7 +113,15 @@ impl<S: Scene, const N: usize, const D: usize> Sim for Model<f32, S, N, D> {
     }
 
     fn init() -> Result<Self, Error> {
-        Model::at_rest(Params::default(), 0.0)
+        Model::at_rest(firmware_params(&Setup::default()), 0.0)
+    }
+
+    fn init_in<'a>(slot: &'a mut MaybeUninit<Self>, setup: &Setup) -> Result<&'a mut Self, Error> {
+        Model::at_rest_in(slot, firmware_params(setup), 0.0)
+    }
+
+    fn spin_start(&mut self, rate: f32) -> Result<(), Error> {
+        spin_start(self, rate)
     }
 
     #[inline(never)]
@@ -90,6 +131,10 @@ impl<S: Scene, const N: usize, const D: usize> Sim for Model<f32, S, N, D> {
 
     fn h(&self) -> f32 {
         self.params().integrator.step
+    }
+
+    fn work_cap(&self) -> u32 {
+        self.params().integrator.max_work
     }
 
     fn tip(&self) -> f32 {
@@ -127,6 +172,35 @@ impl<S: Scene, const N: usize, const D: usize> Sim for Model<f32, S, N, D> {
     }
 }
 
+/// Throws the free ball of `m` along its track at the relative angular speed `rate` \[rad/s\]
+/// from its current configuration (φ̇ = −(ρ/r_b) α̇ with the housing at rest).
+fn spin_start<S: Scene, const N: usize, const D: usize>(
+    m: &mut Model<f32, S, N, D>,
+    rate: f32,
+) -> Result<(), Error> {
+    if D != 4 * N + 1 {
+        return Ok(());
+    }
+    let b = &m.params().ball;
+    let mut v = m.state().v;
+    v[4 * N] = -rate * b.path_radius() / b.radius;
+    let q = m.state().q;
+    m.set_configuration(q, v, 0.0)
+}
+
+/// `&mut MaybeUninit` of the field `$f` of the value in `$slot: &mut MaybeUninit<_>`: builds the
+/// parts of a scene in place.
+macro_rules! field {
+    ($slot:expr, $f:tt) => {{
+        let slot: &mut MaybeUninit<_> = $slot;
+        let p = slot.as_mut_ptr();
+        // SAFETY: a pointer to a field of the value `slot` holds, computed without a reference
+        // to the (uninitialized) value: as valid for writes as `slot`, for as long;
+        // `MaybeUninit<F>` has the field's layout.
+        unsafe { &mut *core::ptr::addr_of_mut!((*p).$f).cast::<MaybeUninit<_>>() }
+    }};
+}
+
 /// The same model driven at 4.10 Hz, where the paper's free ball spends about 40 % of the time
 /// in flight (docs/model.md, "Contact and flight"): the flight steps' cost.
 pub struct InFlight<M>(pub M);
@@ -138,6 +212,20 @@ impl<M: Sim> Sim for InFlight<M> {
 
     fn init() -> Result<Self, Error> {
         M::init().map(InFlight)
+    }
+
+    fn init_in<'a>(slot: &'a mut MaybeUninit<Self>, setup: &Setup) -> Result<&'a mut Self, Error> {
+        M::init_in(field!(slot, 0), setup)?;
+        // SAFETY: the only field was just initialized.
+        Ok(unsafe { slot.assume_init_mut() })
+    }
+
+    fn spin_start(&mut self, rate: f32) -> Result<(), Error> {
+        self.0.spin_start(rate)
+    }
+
+    fn work_cap(&self) -> u32 {
+        self.0.work_cap()
     }
 
     /// Inlined: the counted function is the wrapped model's `Sim::step`.
@@ -171,12 +259,18 @@ impl<M: Sim> Sim for InFlight<M> {
     }
 }
 
-/// A change of `Params::default()` that a firmware scene runs with.
+/// A change of [`firmware_params`] that a firmware scene runs with.
 pub trait Config {
     /// Scene name as printed.
     const NAME: &'static str;
-    /// Applies the change.
-    fn apply(p: &mut Params<f32>);
+    /// The scene's work cap (`Integrator::max_work`): the work of the hardest step of its
+    /// paper run plus the events' reserve, so that the paper's input is never capped
+    /// (`docs/embedded.md`, "Work cap").
+    const MAX_WORK: u32 = absorber_core::newton::work::DEADLINE;
+    /// Applies the change (the cap is set after it).
+    fn apply(p: &mut Params<f32>) {
+        let _ = p;
+    }
 }
 
 /// Modified Newton (`NewtonKind::Modified`: the factored Newton matrix is kept across
@@ -185,30 +279,28 @@ pub struct Modified;
 
 impl Config for Modified {
     const NAME: &'static str = "modified Newton";
+    /// Its hardest paper step takes 62 units (more, cheaper iterations).
+    const MAX_WORK: u32 = 64;
     fn apply(p: &mut Params<f32>) {
         p.integrator.newton = absorber_core::NewtonKind::Modified;
     }
 }
 
-/// Events put at the end of their step (`EventLocation::StepEnd`: no sub-steps, the bounded
-/// worst case).
-pub struct StepEndImpacts;
+/// The work cap `W` (units) instead of [`absorber_core::newton::work::DEADLINE`], for a scene
+/// whose hardest paper step takes `W − 2`: the beam only and the locked ball (23 units), the
+/// free ball on 6 elements (52).
+pub struct Cap<const W: u32>;
 
-impl Config for StepEndImpacts {
-    const NAME: &'static str = "events at the step end";
-    fn apply(p: &mut Params<f32>) {
-        p.integrator.events = absorber_core::EventLocation::StepEnd;
-    }
+impl<const W: u32> Config for Cap<W> {
+    const NAME: &'static str = "work cap";
+    const MAX_WORK: u32 = W;
 }
 
-/// The model with `Params::default()` changed by `C`.
+/// The model with [`firmware_params`] changed by `C`.
 pub struct Configured<M, C>(pub M, core::marker::PhantomData<C>);
 
-/// The model stepped with modified Newton, otherwise `Params::default()`.
+/// The model stepped with modified Newton, otherwise [`firmware_params`].
 pub type ModifiedNewton<M> = Configured<M, Modified>;
-
-/// The model with events at the step end, otherwise `Params::default()`.
-pub type StepEnd<M> = Configured<M, StepEndImpacts>;
 
 impl<S: Scene, const N: usize, const D: usize, C: Config> Sim
     for Configured<Model<f32, S, N, D>, C>
@@ -218,9 +310,27 @@ impl<S: Scene, const N: usize, const D: usize, C: Config> Sim
     }
 
     fn init() -> Result<Self, Error> {
-        let mut p = Params::default();
+        let mut p = firmware_params(&Setup::default());
         C::apply(&mut p);
+        p.integrator.max_work = C::MAX_WORK;
         Model::at_rest(p, 0.0).map(|m| Configured(m, core::marker::PhantomData))
+    }
+
+    fn init_in<'a>(slot: &'a mut MaybeUninit<Self>, setup: &Setup) -> Result<&'a mut Self, Error> {
+        let mut p = firmware_params(setup);
+        C::apply(&mut p);
+        p.integrator.max_work = C::MAX_WORK;
+        Model::<f32, S, N, D>::at_rest_in(field!(slot, 0), p, 0.0)?;
+        // SAFETY: the model was just initialized; the other field is a zero-sized marker.
+        Ok(unsafe { slot.assume_init_mut() })
+    }
+
+    fn spin_start(&mut self, rate: f32) -> Result<(), Error> {
+        spin_start(&mut self.0, rate)
+    }
+
+    fn work_cap(&self) -> u32 {
+        self.0.work_cap()
     }
 
     #[inline(never)]
@@ -294,7 +404,7 @@ impl<
     }
 
     fn init() -> Result<Self, Error> {
-        let p = Params::default();
+        let p = firmware_params(&Setup::default());
         let model = Model::at_rest(p, 0.0)?;
         let monitor = Monitor::new(MonitorConfig::paper(&p)?, &model)?;
         Ok(WithMonitor {
@@ -304,14 +414,36 @@ impl<
         })
     }
 
+    /// The model in place, then the monitor written into its field (`Monitor::new` builds it by
+    /// value: one monitor on the stack, not the whole scene).
+    fn init_in<'a>(slot: &'a mut MaybeUninit<Self>, setup: &Setup) -> Result<&'a mut Self, Error> {
+        let p = firmware_params(setup);
+        let model = Model::<f32, S, N, D>::at_rest_in(field!(slot, model), p, 0.0)?;
+        let monitor = Monitor::<f32, NoTwin, CAP, K, W>::new(MonitorConfig::paper(&p)?, model)?;
+        field!(slot, monitor).write(monitor);
+        field!(slot, record_errors).write(0u32);
+        // SAFETY: every field was just initialized.
+        Ok(unsafe { slot.assume_init_mut() })
+    }
+
+    fn spin_start(&mut self, rate: f32) -> Result<(), Error> {
+        spin_start(&mut self.model, rate)
+    }
+
+    fn work_cap(&self) -> u32 {
+        self.model.work_cap()
+    }
+
     /// Model step, then `Monitor::record` (not after a failed step: the state did not move).
     #[inline(never)]
     fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
-        let r = Model::step(&mut self.model, base_accel)?;
-        if monitor_record(&mut self.monitor, &self.model, &r, base_accel).is_err() {
-            self.record_errors = self.record_errors.saturating_add(1);
+        let r = Model::step(&mut self.model, base_accel);
+        if let Ok(report) = &r {
+            if monitor_record(&mut self.monitor, &self.model, report, base_accel).is_err() {
+                self.record_errors = self.record_errors.saturating_add(1);
+            }
         }
-        Ok(r)
+        r
     }
 
     fn h(&self) -> f32 {
@@ -404,6 +536,50 @@ impl<
     }
 }
 
+/// A model whose `step` can panic (`fw-planted`, never run): the panic check of
+/// `scripts/embedded-report.py` must find the planted path, or it proves nothing.
+pub struct Planted<M>(pub M);
+
+impl<M: Sim> Sim for Planted<M> {
+    fn name() -> &'static str {
+        "planted panic"
+    }
+
+    fn init() -> Result<Self, Error> {
+        M::init().map(Planted)
+    }
+
+    /// The wrapped step, then a panic on one input bit pattern (the optimizer cannot remove it).
+    #[inline(never)]
+    fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error> {
+        let r = self.0.step(base_accel)?;
+        if base_accel.to_bits() == 0x4049_0fdb {
+            panic!("planted");
+        }
+        Ok(r)
+    }
+
+    fn h(&self) -> f32 {
+        self.0.h()
+    }
+
+    fn tip(&self) -> f32 {
+        self.0.tip()
+    }
+
+    fn ball(&self) -> f32 {
+        self.0.ball()
+    }
+
+    fn static_tip(&self) -> f32 {
+        self.0.static_tip()
+    }
+
+    fn state_words(&self, f: &mut dyn FnMut(u32)) {
+        self.0.state_words(f)
+    }
+}
+
 /// No model at all: the same driver, printing and hashing, for the flash/RAM baseline.
 pub struct Empty {
     last: f32,
@@ -427,6 +603,8 @@ impl Sim for Empty {
             impact: None,
             separation: None,
             landing: None,
+            work: 0,
+            outcome: absorber_core::Outcome::Converged,
         })
     }
 
@@ -486,6 +664,21 @@ pub struct Summary {
     pub max_iterations: u32,
     /// Steps that returned an error (state kept, run continued).
     pub errors: u32,
+    /// Steps taken at the work cap (`Outcome::Capped`).
+    pub capped: u32,
+    /// Steps that restarted the model (`Outcome::Restarted`).
+    pub restarts: u32,
+    /// Most work units in one step.
+    pub max_work: u32,
+    /// Longest run of error steps (errors, capped or restarting steps) in a row.
+    pub longest_error_run: u32,
+}
+
+impl Summary {
+    /// Steps that did not converge normally: errors, capped and restarting steps.
+    pub fn error_steps(&self) -> u32 {
+        self.errors + self.capped + self.restarts
+    }
 }
 
 /// Hooks around each step (the firmware measures the stack there; the host does nothing).
@@ -508,6 +701,7 @@ pub fn error_name(e: &Error) -> &'static str {
         Error::NoConvergence { .. } => "NoConvergence",
         Error::NonFiniteState => "NonFiniteState",
         Error::Singular => "Singular",
+        Error::WorkCap => "WorkCap",
         _ => "other",
     }
 }
@@ -519,35 +713,70 @@ impl fmt::Display for F {
     }
 }
 
-/// Runs the scene for [`STEPS`] steps from the model's current state, printing to `out`.
-/// The text is identical on the host and on the target.
-pub fn run<M: Sim, W: Write, P: Probe>(m: &mut M, out: &mut W, probe: &mut P) -> Summary {
+/// Runs the scene for [`STEPS`] steps (a stress scene: its own steps and input) from the
+/// model's current state, printing to `out`. The text is identical on the host and on the
+/// target.
+pub fn run<M: Sim, W: Write, P: Probe>(
+    m: &mut M,
+    setup: &Setup,
+    out: &mut W,
+    probe: &mut P,
+) -> Summary {
     let h = m.h();
+    let steps = setup.steps();
     let _ = writeln!(
         out,
         "scene {} h={} steps={} A={:e} f={:e}",
         M::name(),
         F(h),
-        STEPS,
-        AMPLITUDE,
+        steps,
+        setup.amplitude(),
         M::frequency()
     );
+    if let Some(st) = setup.stress {
+        let _ = writeln!(out, "stress {}", st.name);
+    }
     let _ = writeln!(out, "static tip={}", F(m.static_tip()));
+    {
+        use absorber_core::newton::work as w;
+        let _ = writeln!(
+            out,
+            "work cap={} refresh={} residual={} solve={} fallback={}",
+            m.work_cap(),
+            w::REFRESH,
+            w::RESIDUAL,
+            w::SOLVE,
+            w::FALLBACK
+        );
+    }
     let mut hash = Fnv::default();
     let mut s = Summary::default();
+    if let Some(rate) = setup.stress.and_then(|st| st.spin) {
+        if let Err(e) = m.spin_start(rate) {
+            let _ = writeln!(out, "spun start failed: {}", error_name(&e));
+        }
+    }
+    let mut rng = stress::Rng::default();
+    let mut run = 0u32;
     // Impact steps printed on the current line (16 per line).
     let mut on_line = 0u32;
-    for k in 1..=STEPS {
-        let accel = base_accel(k, h, M::frequency());
+    for k in 1..=steps {
+        let accel = match setup.stress {
+            Some(st) => st.accel(k, h, M::frequency(), &mut rng),
+            None => base_accel(k, h, M::frequency()),
+        };
         probe.before_step();
         let r = m.step(accel);
         probe.after_step();
-        match r {
+        let normal = match r {
             Ok(rep) => {
                 s.iterations += rep.iterations;
                 s.max_iterations = s.max_iterations.max(rep.iterations);
+                s.max_work = s.max_work.max(rep.work);
                 hash.word(rep.iterations);
                 hash.word(rep.increment.to_bits());
+                hash.word(rep.work);
+                hash.word(rep.outcome as u32);
                 if let Some(i) = rep.impact {
                     s.impacts += 1;
                     s.stuck += u32::from(i.stuck);
@@ -566,13 +795,29 @@ pub fn run<M: Sim, W: Write, P: Probe>(m: &mut M, out: &mut W, probe: &mut P) ->
                         on_line = 0;
                     }
                 }
+                match rep.outcome {
+                    Outcome::Converged => true,
+                    Outcome::Capped => {
+                        s.capped += 1;
+                        false
+                    }
+                    Outcome::Restarted => {
+                        s.restarts += 1;
+                        false
+                    }
+                }
             }
             Err(e) => {
                 s.errors += 1;
                 hash.word(0xdead_0000 | s.errors);
-                let _ = writeln!(out, "step {k}: error {} (state kept)", error_name(&e));
+                if s.errors <= 20 {
+                    let _ = writeln!(out, "step {k}: error {} (state kept)", error_name(&e));
+                }
+                false
             }
-        }
+        };
+        run = if normal { 0 } else { run + 1 };
+        s.longest_error_run = s.longest_error_run.max(run);
         m.state_words(&mut |w| hash.word(w));
         // Every whole second of simulated time (k h crosses j seconds).
         if (k * STEP_MS) / 1000 != ((k - 1) * STEP_MS) / 1000 {
@@ -592,6 +837,15 @@ pub fn run<M: Sim, W: Write, P: Probe>(m: &mut M, out: &mut W, probe: &mut P) ->
         out,
         "impacts={} stuck={} iterations={} max_iterations={} errors={}",
         s.impacts, s.stuck, s.iterations, s.max_iterations, s.errors
+    );
+    let _ = writeln!(
+        out,
+        "capped={} restarts={} error_steps={} longest_error_run={} max_work={}",
+        s.capped,
+        s.restarts,
+        s.error_steps(),
+        s.longest_error_run,
+        s.max_work
     );
     let _ = writeln!(out, "state_hash=0x{:016x}", s.hash);
     s
@@ -617,7 +871,8 @@ macro_rules! firmware_main {
     };
 }
 
-/// Host side: runs the scene and prints the reference (the firmware must print the same).
+/// Host side: runs the scene (`stress=<name>` on the command line: a stress scene) and prints
+/// the reference (the firmware must print the same).
 #[cfg(not(target_os = "none"))]
 pub fn host_main<M: Sim>() {
     use std::io::Write as _;
@@ -628,10 +883,18 @@ pub fn host_main<M: Sim>() {
             Ok(())
         }
     }
+    let mut setup = Setup::default();
+    for a in std::env::args().skip(1) {
+        if setup.arg(&a).is_err() {
+            eprintln!("unknown stress scene in `{a}`");
+            std::process::exit(4);
+        }
+    }
     let mut out = Out(String::new());
-    let code = match M::init() {
-        Ok(mut m) => {
-            run(&mut m, &mut out, &mut NoProbe);
+    let mut slot = Box::new(MaybeUninit::<M>::uninit());
+    let code = match M::init_in(&mut slot, &setup) {
+        Ok(m) => {
+            run(m, &setup, &mut out, &mut NoProbe);
             0
         }
         Err(e) => {
@@ -645,6 +908,7 @@ pub fn host_main<M: Sim>() {
 
 pub mod cost;
 pub mod estimator;
+pub mod stress;
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 #[rustfmt::skip]
 pub mod estimator_gain;

@@ -5,9 +5,14 @@
 //! * `expect=0x<16 hex digits>`: the host's `state_hash`; exit 0 only if this run reproduces it
 //!   (1 if not, 2 if no reference was given);
 //! * `stack`: paint the 32 KiB below the stack pointer before every step and report the deepest
-//!   stack use of `Sim::step` (costs time, so off by default).
+//!   stack use of `Sim::step` (costs time, so off by default);
+//! * `stress=<name>`: a stress scene (`crate::stress`) instead of the paper's run.
+//!
+//! Every run reports the stack used from reset to the end of the scene's construction (the boot
+//! RAM: cortex-m-rt's `paint-stack` fills the stack at reset; the deepest overwritten word after
+//! the construction).
 
-use crate::{error_name, run, Probe, Sim};
+use crate::{error_name, run, Probe, Setup, Sim};
 use core::fmt::{self, Write};
 use core::mem::MaybeUninit;
 use semihosting::io::Write as _;
@@ -127,6 +132,7 @@ pub fn target_main<M: Sim>(slot: &'static mut MaybeUninit<M>) -> ! {
         max_k: 0,
         overflow: false,
     };
+    let mut setup = Setup::default();
     if let Ok(args) = semihosting::experimental::env::args::<256>() {
         for a in &args {
             match a {
@@ -135,20 +141,26 @@ pub fn target_main<M: Sim>(slot: &'static mut MaybeUninit<M>) -> ! {
                     let hex = s["expect=".len()..].trim_start_matches("0x");
                     expect = u64::from_str_radix(hex, 16).ok();
                 }
+                Ok(s) => {
+                    if setup.arg(s).is_err() {
+                        let _ = writeln!(out, "unknown stress scene in `{s}`");
+                        semihosting::process::exit(4)
+                    }
+                }
                 _ => {}
             }
         }
     }
     let bottom = stack_bottom();
-    let m = match M::init() {
-        Ok(m) => slot.write(m),
+    let m = match M::init_in(slot, &setup) {
+        Ok(m) => m,
         Err(e) => {
             let _ = writeln!(out, "init failed: {}", error_name(&e));
             semihosting::process::exit(3)
         }
     };
     let init_used = stack_top() - lowest_used(bottom, sp());
-    let summary = run(m, &mut out, &mut probe);
+    let summary = run(m, &setup, &mut out, &mut probe);
     let _ = writeln!(
         out,
         "# target: size_of model = {} bytes",
@@ -156,7 +168,7 @@ pub fn target_main<M: Sim>(slot: &'static mut MaybeUninit<M>) -> ! {
     );
     let _ = writeln!(
         out,
-        "# target: stack high-water of init (at_rest) from reset = {init_used} bytes"
+        "# target: boot stack from reset = {init_used} bytes (high-water through the scene's construction)"
     );
     if probe.enabled {
         let _ = writeln!(
@@ -204,7 +216,6 @@ pub fn cost_main() -> ! {
 }
 
 /// Panics end the run with exit code 101 (the model itself never panics; see docs/embedded.md).
-#[cfg(not(feature = "panic-never"))]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
     if let Ok(mut e) = semihosting::io::stderr() {
@@ -215,16 +226,4 @@ fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
         let _ = e.write_all(b"\n");
     }
     semihosting::process::exit(101)
-}
-
-/// `panic-never` build: any panic path the optimizer cannot remove leaves a reference to an
-/// undefined symbol, so the link fails and names the caller.
-#[cfg(feature = "panic-never")]
-#[panic_handler]
-fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
-    extern "Rust" {
-        fn panic_path_is_reachable_in_the_firmware() -> !;
-    }
-    // SAFETY: never called in a binary that links.
-    unsafe { panic_path_is_reachable_in_the_firmware() }
 }

@@ -157,6 +157,8 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             newton: p.integrator.newton,
             accept_after_budget: p.integrator.accept_after_budget,
             events: p.integrator.events,
+            max_work: p.integrator.max_work,
+            at_cap: p.integrator.at_cap,
         },
         damping: Damping {
             stiffness_proportional: p.damping.stiffness_proportional as f32,

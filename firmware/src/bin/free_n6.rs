@@ -3,6 +3,9 @@
 //! On `thumbv7em-none-eabihf` this is the firmware; on the host it prints the reference.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
-type M = absorber_core::FreeBallModel<f32, 6, 25>;
+type M = absorber_firmware::Configured<
+    absorber_core::FreeBallModel<f32, 6, 25>,
+    absorber_firmware::Cap<54>,
+>;
 
 absorber_firmware::firmware_main!(M);

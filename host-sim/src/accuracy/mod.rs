@@ -13,6 +13,7 @@
 //! h = 3 ms it is exactly the paper's (and the firmware's) integrator, γ = 0.7, β = 0.36, C = 0.
 //! One candidate keeps the paper's γ, β at h = 1 ms without C to show what that costs.
 
+pub mod cap;
 pub mod report;
 pub mod sim;
 
@@ -84,6 +85,9 @@ pub struct Config {
     /// (`EventLocation::StepEnd`) instead of their crossing.
     #[serde(default)]
     pub step_end: bool,
+    /// The firmware's work cap per step (`absorber_core::newton::work::DEADLINE`; else none).
+    #[serde(default)]
+    pub capped: bool,
 }
 
 impl Config {
@@ -97,6 +101,7 @@ impl Config {
         rule: Rule::Matched,
         calibration: None,
         step_end: false,
+        capped: false,
     };
 
     /// The same with other fields.
@@ -124,7 +129,7 @@ impl Config {
             Rule::Paper => " paper-γ",
         };
         format!(
-            "N{} h{} {} {}{}{}{}",
+            "N{} h{} {} {}{}{}{}{}",
             self.elements,
             hs,
             if self.f32 { "f32" } else { "f64" },
@@ -135,7 +140,8 @@ impl Config {
             } else {
                 ""
             },
-            if self.step_end { " step-end" } else { "" }
+            if self.step_end { " step-end" } else { "" },
+            if self.capped { " capped" } else { "" }
         )
     }
 
@@ -168,6 +174,9 @@ impl Config {
         }
         if self.step_end {
             p.integrator.events = absorber_core::EventLocation::StepEnd;
+        }
+        if self.capped {
+            p.integrator.max_work = absorber_core::newton::work::DEADLINE;
         }
         p
     }
@@ -204,6 +213,9 @@ impl Config {
         }
         if self.step_end {
             a.push_str(" events=step-end");
+        }
+        if self.capped {
+            a.push_str(&format!(" work={}", absorber_core::newton::work::DEADLINE));
         }
         Some(a)
     }
@@ -547,6 +559,7 @@ pub fn reference_config(n: usize, h: f64) -> Config {
         rule: Rule::Matched,
         calibration: None,
         step_end: false,
+        capped: false,
     }
 }
 

@@ -168,6 +168,11 @@ fn all_candidates() -> Result<Vec<Config>> {
     // Events at the step end (the bounded worst step), default and calibrated N = 3.
     cands.push(Config::DEFAULT.with(|c| c.step_end = true));
     cands.push(calibrated(Config::DEFAULT.with(|c| c.step_end = true), 16)?);
+    // The firmware's default: events at the step end and the work cap (section 7).
+    cands.push(Config::DEFAULT.with(|c| {
+        c.step_end = true;
+        c.capped = true;
+    }));
     Ok(cands)
 }
 
@@ -743,6 +748,7 @@ impl Ctx {
         )?;
         self.key_numbers(&mut m, &pts)?;
         writeln!(m, "{}", include_str!("recommendation.md"))?;
+        m.push_str(&super::cap::section()?);
         Ok(m)
     }
 

@@ -2017,6 +2017,8 @@ impl FullSolver {
             impact: None,
             separation: None,
             landing: None,
+            work: 0,
+            outcome: absorber_core::Outcome::Converged,
         };
         let next = if start.contact == Contact::InFlight {
             // In flight: a landing or a stop splits the step at the crossing (flight.rs).
