@@ -63,7 +63,7 @@ pub use energy::Energies;
 pub use error::Error;
 pub use flight::{Flight, Landing};
 pub use loads::{ArmParams, Loads, PointMass};
-pub use model::{Contact, Impact, Model, Side, State, StepReport};
+pub use model::{Contact, EventCounts, Impact, Model, Side, State, StepReport};
 pub use outputs::ContactForces;
 pub use params::{
     BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,

@@ -111,6 +111,19 @@ pub struct Impact<T> {
     pub stuck: bool,
 }
 
+/// How many events of each kind a step had. A step can hold more than one (a bounce and a
+/// stop hit in the rest of the step, a landing and a take-off at the step's end); the report's
+/// `impact` and `landing` describe one of them, these count all.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EventCounts {
+    /// Take-offs from the track.
+    pub separations: u32,
+    /// Landings on the track (bounces and rolling landings).
+    pub landings: u32,
+    /// Stop impacts (on the track and in flight, a plastic return onto the stop included).
+    pub impacts: u32,
+}
+
 /// What one step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepReport<T> {
@@ -122,8 +135,10 @@ pub struct StepReport<T> {
     pub impact: Option<Impact<T>>,
     /// Time at which the ball left the track within the step, if it did \[s\].
     pub separation: Option<T>,
-    /// Landing on the track within the step, if any.
+    /// Landing on the track within the step, if any (the last one).
     pub landing: Option<crate::flight::Landing<T>>,
+    /// How many separations, landings and stop impacts the step had.
+    pub events: EventCounts,
 }
 
 impl<T: Real> StepReport<T> {
@@ -149,6 +164,7 @@ impl<T: Real> StepReport<T> {
                 tangential_impulse: f(l.tangential_impulse),
                 bounced: l.bounced,
             }),
+            events: self.events,
         }
     }
 }
@@ -366,6 +382,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             impact: None,
             separation: None,
             landing: None,
+            events: EventCounts::default(),
         };
         if S::FLIGHT && start.contact == Contact::InFlight {
             // 2'. In flight: a landing or a stop splits the step at the crossing.
@@ -373,8 +390,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         } else {
             // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
             self.stop_events(start, &mut next, base_accel, ws, &mut report)?;
-            // 3. Separation: a track that would pull the ball lets it fly.
-            if self.flies() && report.impact.is_none() {
+            // 3. Separation: a track that would pull the ball lets it fly (after a stop impact,
+            // at the step's end: `separation` says how).
+            if self.flies() {
                 self.separation(start, &mut next, base_accel, ws, &mut report)?;
             }
         }

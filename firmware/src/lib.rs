@@ -427,6 +427,8 @@ impl Sim for Empty {
             impact: None,
             separation: None,
             landing: None,
+            // (The step report counts its events since the flight/stop changes: none here.)
+            events: Default::default(),
         })
     }
 
