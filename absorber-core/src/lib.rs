@@ -66,7 +66,9 @@ pub use energy::Energies;
 pub use error::Error;
 pub use flight::{Flight, Landing};
 pub use loads::{ArmParams, Loads, PointMass};
-pub use model::{Contact, Impact, Model, Outcome, Side, State, StepReport, RESTART_AFTER};
+pub use model::{
+    Contact, EventCounts, Impact, Model, Outcome, Side, State, StepReport, RESTART_AFTER,
+};
 pub use outputs::ContactForces;
 pub use params::{
     AtCap, BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,

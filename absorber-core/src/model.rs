@@ -137,6 +137,19 @@ pub const RESTART_AFTER: u32 = 3;
 /// convergence: it ends a run of failed steps instead of extending it ([`Model::step`]).
 pub const RESTART_INCREMENT: f64 = 100.0;
 
+/// How many events of each kind a step had. A step can hold more than one (a bounce and a
+/// stop hit in the rest of the step, a landing and a take-off at the step's end); the report's
+/// `impact` and `landing` describe one of them, these count all.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EventCounts {
+    /// Take-offs from the track.
+    pub separations: u32,
+    /// Landings on the track (bounces and rolling landings).
+    pub landings: u32,
+    /// Stop impacts (on the track and in flight, a plastic return onto the stop included).
+    pub impacts: u32,
+}
+
 /// What one step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepReport<T> {
@@ -148,13 +161,15 @@ pub struct StepReport<T> {
     pub impact: Option<Impact<T>>,
     /// Time at which the ball left the track within the step, if it did \[s\].
     pub separation: Option<T>,
-    /// Landing on the track within the step, if any.
+    /// Landing on the track within the step, if any (the last one).
     pub landing: Option<crate::flight::Landing<T>>,
     /// Work units the step used ([`crate::newton::work`]; at most
     /// [`crate::Integrator::max_work`]).
     pub work: u32,
     /// Whether the step converged, was capped or restarted the model.
     pub outcome: Outcome,
+    /// How many separations, landings and stop impacts the step had.
+    pub events: EventCounts,
 }
 
 impl<T: Real> StepReport<T> {
@@ -182,6 +197,7 @@ impl<T: Real> StepReport<T> {
             }),
             work: self.work,
             outcome: self.outcome,
+            events: self.events,
         }
     }
 }
@@ -515,6 +531,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             landing: None,
             work,
             outcome: Outcome::Restarted,
+            events: EventCounts::default(),
         };
         if !self.sys.rest.ready {
             return report;
@@ -594,6 +611,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             landing: None,
             work: 0,
             outcome: Outcome::Converged,
+            events: EventCounts::default(),
         };
         // An event the work cap cannot afford (a plastic landing's own matrix) leaves the state
         // as the event code found it, consistent, and waits for the next step (`waits`).
@@ -605,8 +623,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
             let r = self.stop_events(start, &mut next, base_accel, ws, &mut report);
             waits(ws, r)?;
-            // 3. Separation: a track that would pull the ball lets it fly.
-            if self.flies() && report.impact.is_none() {
+            // 3. Separation: a track that would pull the ball lets it fly (after a stop impact,
+            // at the step's end: `separation` says how).
+            if self.flies() {
                 let r = self.separation(start, &mut next, base_accel, ws, &mut report);
                 waits(ws, r)?;
             }

@@ -54,6 +54,15 @@ pub struct BallParams<T> {
     pub initial_angle: T,
     /// How the stop impulse is distributed over the system.
     pub impact_model: ImpactModel,
+    /// Duration τ_s of a stop impact \[s\] for the over-step impulse metric
+    /// ([`ImpactModel::OverStep`]): the stops' impulses (on the track and in flight) act through
+    /// `W = M + γτ_s C + βτ_s² K`, as a contact lasting τ_s would. 0 (the default) means the
+    /// time step h, the paper's model: the response of the stiff modes to a stop impact then
+    /// depends on h. A compliant stop (an elastomer bumper) has a contact time of its own
+    /// (Hertz: about 3 ms for a 14 g ball on a 5 MPa pad at 0.1–0.5 m/s; docs/model.md,
+    /// "Stops"), and with it every step sees the same impact. Ignored by the instantaneous
+    /// model.
+    pub stop_contact_time: T,
     /// The ball may leave the track when the track would have to pull it (normal force
     /// `N < 0`), fly inside the housing and land again ([`crate::flight`]; issue 13). `false`
     /// keeps the bilateral track of the paper (the ball is held on its circle by any force),
@@ -64,6 +73,14 @@ pub struct BallParams<T> {
     /// default 0.5, the stops' value: the same ball on the same housing). A landing slower
     /// than `ρ · stick_speed` along the normal is plastic and the ball rolls on.
     pub landing_restitution: T,
+    /// Shortest flight a bounce may start \[s\]: a landing whose rebound would fly for less
+    /// (`2 e_n v_n / a_p`, pressed onto the track at `a_p`) is a rolling landing
+    /// ([`crate::flight::landing_bounces`]). 0 (the default) means the time step h, the
+    /// shortest flight a step resolves: the number of bounces then grows as h shrinks (a
+    /// bouncing ball's rebounds shorten geometrically). A fixed time makes the cut the same
+    /// for every step not longer than it (3 ms: rebounds lower than about 10 µm at 1 g roll
+    /// on; docs/model.md, "Contact statistics").
+    pub min_bounce_time: T,
 }
 
 /// How a stop impulse `Λ ∇Gᵀ` changes the velocities (both give `Ġ⁺ = −e Ġ⁻` exactly).
@@ -335,8 +352,10 @@ impl<T: Real> Default for Params<T> {
                 stick_speed: lit(0.02),
                 initial_angle: lit(1.0f64.to_radians()),
                 impact_model: ImpactModel::OverStep,
+                stop_contact_time: T::zero(),
                 flight: true,
                 landing_restitution: lit(0.5),
+                min_bounce_time: T::zero(),
             },
             integrator: Integrator {
                 gamma: lit(0.7),
@@ -441,6 +460,8 @@ impl<T: Real> Params<T> {
                 });
             }
             non_negative(bl.stick_speed, "ball.stick_speed")?;
+            non_negative(bl.stop_contact_time, "ball.stop_contact_time")?;
+            non_negative(bl.min_bounce_time, "ball.min_bounce_time")?;
             if !bl.initial_angle.is_finite() {
                 return Err(Error::InvalidParameter {
                     field: "ball.initial_angle",

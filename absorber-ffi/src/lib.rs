@@ -1915,6 +1915,12 @@ unsafe fn monitor_record<T: Scalar>(
             ABSORBER_OUTCOME_RESTARTED => Outcome::Restarted,
             _ => Outcome::Converged,
         },
+        // The C report carries one event of each kind (its flags): counted as such.
+        events: absorber_core::EventCounts {
+            separations: u32::from(r.separation != 0),
+            landings: u32::from(r.landing != 0),
+            impacts: u32::from(r.impact != 0),
+        },
     };
     match m.record(mon, &rep, base_accel) {
         Ok(s) => {

@@ -6,7 +6,7 @@
 //! values bit for bit.
 
 use absorber_core::monitor::DetailCategory;
-use absorber_core::{EventLocation, ImpactModel, NewtonKind, Params};
+use absorber_core::{AtCap, EventLocation, ImpactModel, NewtonKind, Params};
 use std::fmt::Write as _;
 
 /// File name of the configuration inside the FMU's `resources/` folder.
@@ -107,6 +107,8 @@ macro_rules! float_fields {
             ball.stick_speed,
             ball.initial_angle,
             ball.landing_restitution,
+            ball.stop_contact_time,
+            ball.min_bounce_time,
             integrator.gamma,
             integrator.beta,
             integrator.alpha_m,
@@ -204,6 +206,15 @@ impl Config {
             }
         );
         let _ = writeln!(s, "ball.flight = {}", p.ball.flight);
+        let _ = writeln!(s, "integrator.max_work = {}", p.integrator.max_work);
+        let _ = writeln!(
+            s,
+            "integrator.at_cap = {}",
+            match p.integrator.at_cap {
+                AtCap::Take => "take",
+                AtCap::Keep => "keep",
+            }
+        );
         s
     }
 
@@ -283,6 +294,14 @@ impl Config {
             }
         };
         p.integrator.accept_after_budget = flag("integrator.accept_after_budget")?;
+        p.integrator.max_work = get("integrator.max_work")?
+            .parse()
+            .map_err(|_| bad("integrator.max_work", "is not a whole number"))?;
+        p.integrator.at_cap = match get("integrator.at_cap")? {
+            "take" => AtCap::Take,
+            "keep" => AtCap::Keep,
+            _ => return Err(bad("integrator.at_cap", "must be take or keep")),
+        };
         p.integrator.events = match get("integrator.events")? {
             "crossing" => EventLocation::Crossing,
             "step-end" => EventLocation::StepEnd,

@@ -261,6 +261,8 @@ pub fn cast_params<T: Real>(p: &Params<f64>) -> Params<T> {
             impact_model: b.impact_model,
             flight: b.flight,
             landing_restitution: lit(b.landing_restitution),
+            stop_contact_time: lit(b.stop_contact_time),
+            min_bounce_time: lit(b.min_bounce_time),
         },
         integrator: Integrator {
             gamma: lit(i.gamma),
@@ -273,6 +275,8 @@ pub fn cast_params<T: Real>(p: &Params<f64>) -> Params<T> {
             newton: i.newton,
             accept_after_budget: i.accept_after_budget,
             events: i.events,
+            max_work: i.max_work,
+            at_cap: i.at_cap,
         },
         damping: Damping {
             stiffness_proportional: lit(p.damping.stiffness_proportional),

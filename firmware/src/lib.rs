@@ -605,6 +605,8 @@ impl Sim for Empty {
             landing: None,
             work: 0,
             outcome: absorber_core::Outcome::Converged,
+            // (The step report counts its events since the flight/stop changes: none here.)
+            events: Default::default(),
         })
     }
 

@@ -141,8 +141,10 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             stick_speed: b.stick_speed as f32,
             initial_angle: b.initial_angle as f32,
             impact_model: b.impact_model,
+            stop_contact_time: b.stop_contact_time as f32,
             flight: b.flight,
             landing_restitution: b.landing_restitution as f32,
+            min_bounce_time: b.min_bounce_time as f32,
         },
         // Every field spelled out: a new field of the core fails to compile here instead of
         // silently keeping its f32 default (generalized-α once did).

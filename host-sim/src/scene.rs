@@ -167,6 +167,9 @@ pub struct BallSection {
     pub initial_angle_deg: f64,
     /// Impact model.
     pub impact_model: ImpactSetting,
+    /// Contact time of a stop impact \[s\] for the over-step impulse (0: the time step, the
+    /// paper's model; `absorber_core::BallParams::stop_contact_time`).
+    pub stop_contact_time: f64,
     /// Static friction coefficient between ball and track \[-\]: the model assumes rolling
     /// without slip, and `run` reports how long rolling would need more than this. Clean, dry
     /// steel on steel is about 0.5–0.8, lubricated 0.1–0.2 (engineering handbooks, e.g. Marks'
@@ -179,6 +182,9 @@ pub struct BallSection {
     /// Coefficient of normal restitution of a landing on the track \[-\] (default 0.5, the
     /// stops' value).
     pub landing_restitution: f64,
+    /// Shortest flight a bounce may start \[s\] (0: the time step;
+    /// `absorber_core::BallParams::min_bounce_time`).
+    pub min_bounce_time: f64,
 }
 
 /// `[damping]`: stiffness-proportional structural damping, off by default.
@@ -603,9 +609,11 @@ impl Default for BallSection {
                 ImpactModel::Instantaneous => ImpactSetting::Instantaneous,
                 ImpactModel::OverStep => ImpactSetting::OverStep,
             },
+            stop_contact_time: p.stop_contact_time,
             friction: 0.5,
             flight: p.flight,
             landing_restitution: p.landing_restitution,
+            min_bounce_time: p.min_bounce_time,
         }
     }
 }
@@ -885,8 +893,10 @@ impl Scene {
                     ImpactSetting::OverStep => ImpactModel::OverStep,
                     ImpactSetting::Instantaneous => ImpactModel::Instantaneous,
                 },
+                stop_contact_time: b.stop_contact_time,
                 flight: b.flight,
                 landing_restitution: b.landing_restitution,
+                min_bounce_time: b.min_bounce_time,
             },
             integrator: {
                 // Field by field, so that core fields without a scene key keep their default.
@@ -1121,6 +1131,8 @@ fn scene_key(field: &str, s: &Scene) -> (String, String) {
         "ball.restitution" => (field.into(), v(f.ball.restitution)),
         "ball.stick_speed" => (field.into(), v(f.ball.stick_speed)),
         "ball.landing_restitution" => (field.into(), v(f.ball.landing_restitution)),
+        "ball.stop_contact_time" => (field.into(), v(f.ball.stop_contact_time)),
+        "ball.min_bounce_time" => (field.into(), v(f.ball.min_bounce_time)),
         "integrator.gamma" => (field.into(), v(f.integrator.gamma)),
         "integrator.beta" => (field.into(), v(f.integrator.beta)),
         "integrator.step" => (field.into(), v(f.integrator.step)),

@@ -35,8 +35,12 @@
 //!   `−∇ψ`), `Λ = −(1 + e) α̇_f / (∇α_f W⁻¹ ∇α_fᵀ)`, towards the face met only, plastic below
 //!   `stick_speed`; the ball flies on.
 //!
-//! Then the consistent acceleration of the mode the event leaves (the generalized-α recursion
-//! restarts from it), as after a stop impact.
+//! After an impulse the velocities have jumped and the accelerations (and the generalized-α
+//! variable) go on from before it, as the core's (`System::after_impulse`: the impulse is the
+//! nonsmooth part of the motion); a take-off (no impulse) restarts from the consistent
+//! acceleration of the flight mode. A ball on the track at the end of a step that had an event
+//! takes off there if the track pulls. The flying ball's centre is integrated exactly (the
+//! core's `System::fly`: its acceleration `(0, −g_eff)` is known, linear in time over a step).
 
 use super::{lock, FullSolver, FullState, Work};
 use crate::full::kin::{Mode, NW, PHI, PSI, RB1, RB2};
@@ -210,8 +214,59 @@ impl FullSolver {
         Some((side, inside, tau))
     }
 
-    /// The consistent acceleration after a jump of velocity or mode (the generalized-α
-    /// recursion restarts from it).
+    /// After an impulse at `s` that began at `before`: the accelerations and the generalized-α
+    /// variable are `before`'s (the core's `System::after_impulse`); `complete` recomputed the
+    /// dependent coordinates' accelerations from the new velocities. A flying ball's centre keeps
+    /// its known acceleration.
+    pub(super) fn after_impulse(&self, s: &mut FullState, before: &FullState) {
+        s.pa.clone_from(&before.pa);
+        if s.contact == Contact::InFlight {
+            let g = self.effective_gravity(s.base_accel);
+            for (z, a) in [(self.zloc(RB1), 0.0), (self.zloc(RB2), -g)] {
+                s.a[z] = a;
+                s.pa[z] = a;
+            }
+        }
+    }
+
+    /// The exact flight of the ball's centre over a step of `h` from `s` into `next` (the core's
+    /// `System::fly`): with `(0, −g_eff)` linear in time from its value at `s` to `next`'s,
+    /// `Δċ = h (a₀ + a₁)/2`, `Δc = h ċ₀ + h² (a₀/3 + a₁/6)` (the scheme's own integration of the
+    /// decoupled ball rows drifted under a moving base).
+    pub(super) fn fly_exactly(&self, s: &FullState, h: f64, next: &mut FullState) {
+        let (g0, g1) = (
+            self.effective_gravity(s.base_accel),
+            self.effective_gravity(next.base_accel),
+        );
+        for (z, a0, a1) in [(self.zloc(RB1), 0.0, 0.0), (self.zloc(RB2), -g0, -g1)] {
+            next.q[z] = s.q[z] + h * s.v[z] + h * h * (a0 / 3.0 + a1 / 6.0);
+            next.v[z] = s.v[z] + h * (a0 + a1) / 2.0;
+            next.a[z] = a1;
+            next.pa[z] = a1;
+        }
+    }
+
+    /// A ball on the track at the end `end` of a step that had an event (a stop impact, a
+    /// landing) leaves the track there if it pulls (the core's `take_off_at_end`); `time` is the
+    /// step's end.
+    pub(super) fn take_off_at_end(
+        &self,
+        end: &mut FullState,
+        time: f64,
+        report: &mut StepReport<f64>,
+    ) -> Result<(), Error> {
+        if end.contact == Contact::InFlight || !positive(-self.normal_force(end)?) {
+            return Ok(());
+        }
+        end.contact = Contact::InFlight;
+        self.restart_acceleration(end, report)?;
+        report.separation = Some(time);
+        report.events.separations += 1;
+        Ok(())
+    }
+
+    /// The consistent acceleration after a change of mode (the generalized-α recursion
+    /// restarts from it).
     fn restart_acceleration(
         &self,
         s: &mut FullState,
@@ -243,15 +298,17 @@ impl FullSolver {
     }
 
     /// `W⁻¹ g` for the impulse metric of `ball.impact_model` in `mode` at the configuration of
-    /// `s` (the reduced Newton matrix of a whole step, or the reduced mass matrix).
+    /// `s` (the reduced Newton matrix of a contact lasting τ — the stop's contact time for a
+    /// `stop` impulse when it is set, else the step — or the reduced mass matrix).
     pub(super) fn metric_solve(
         &self,
         s: &FullState,
         mode: Mode,
         g: &[f64],
+        stop: bool,
     ) -> Result<Vec<f64>, Error> {
         let ch = if self.params.ball.impact_model == ImpactModel::OverStep {
-            self.step_chain(self.params.integrator.step)
+            self.step_chain(self.impulse_duration(stop))
         } else {
             Chain {
                 c_q: 0.0,
@@ -287,12 +344,12 @@ impl FullSolver {
         Ok(y)
     }
 
-    /// The ball leaves the track if the rolling step from `start` to `next` (no stop impact)
-    /// ends with the track pulling it (spec rule 1).
+    /// The ball leaves the track if the rolling step from `start` to `next` ends with the track
+    /// pulling it (spec rule 1); after a stop impact in the step, at its end.
     pub(super) fn separation(
         &self,
         start: &FullState,
-        next: FullState,
+        mut next: FullState,
         base_accel: f64,
         report: &mut StepReport<f64>,
     ) -> Result<FullState, Error> {
@@ -301,6 +358,11 @@ impl FullSolver {
             return Ok(next);
         }
         let h = self.params.integrator.step;
+        if report.impact.is_some() {
+            self.take_off_at_end(&mut next, start.time + h, report)?;
+            return Ok(next);
+        }
+        report.events.separations += 1;
         let tau = separation_fraction(self.normal_force(start)?, n_end);
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
@@ -309,7 +371,9 @@ impl FullSolver {
         mid.contact = Contact::InFlight;
         self.restart_acceleration(&mut mid, report)?;
         report.separation = Some(mid.time);
-        self.rest_of_step(&mid, h - h1, base_accel, report)
+        let mut end = self.rest_of_step(&mid, h - h1, base_accel, report)?;
+        self.take_off_at_end(&mut end, start.time + h, report)?;
+        Ok(end)
     }
 
     /// The events of a flight step from `start` whose trial end is `trial` (spec rules 2, 3).
@@ -350,11 +414,14 @@ impl FullSolver {
         match event {
             FlightEvent::Landing => self.land(&mut mid, report)?,
             FlightEvent::Stop(side, inside) => {
-                let impact = self.stop_in_flight(&mut mid, side, inside, report)?;
+                let impact = self.stop_in_flight(&mut mid, side, inside)?;
                 report.impact = Some(impact);
+                report.events.impacts += 1;
             }
         }
-        self.rest_of_step(&mid, h - h1, base_accel, report)
+        let mut end = self.rest_of_step(&mid, h - h1, base_accel, report)?;
+        self.take_off_at_end(&mut end, start.time + h, report)?;
+        Ok(end)
     }
 
     /// The rest `h_rest` of a step after an event at `mid`, in the mode the event left; an
@@ -369,8 +436,9 @@ impl FullSolver {
         let mut end = self.sub_step(mid, h_rest, base_accel, report)?;
         if end.contact == Contact::InFlight {
             if let Some((side, inside, _)) = self.stop_crossing(mid, &end) {
-                let impact = self.stop_in_flight(&mut end, side, inside, report)?;
+                let impact = self.stop_in_flight(&mut end, side, inside)?;
                 report.impact = report.impact.or(Some(impact));
+                report.events.impacts += 1;
             }
             if self.relative(&end).r > self.params.ball.path_radius() {
                 self.land(&mut end, report)?;
@@ -392,9 +460,11 @@ impl FullSolver {
                 if inside {
                     end = self.rest_on_stop(&end, side)?;
                 } else {
+                    let before = end.clone();
                     let impact = self.impact(&mut end, side, false)?;
-                    self.restart_acceleration(&mut end, report)?;
+                    self.after_impulse(&mut end, &before);
                     report.impact = report.impact.or(Some(impact));
+                    report.events.impacts += 1;
                 }
             }
         }
@@ -402,7 +472,7 @@ impl FullSolver {
     }
 
     /// The landing at the crossing `s` (spec "Impacts, Landing"): the centre put on the circle,
-    /// then a bounce or a plastic, rough landing; the consistent acceleration of the mode left.
+    /// then a bounce or a plastic, rough landing; the accelerations go on from before it.
     pub(super) fn land(
         &self,
         s: &mut FullState,
@@ -424,7 +494,7 @@ impl FullSolver {
             work.projection = work.projection.max((rel.r - rho).abs());
         }
         let normal_speed = n[0] * rel.rate[0] + n[1] * rel.rate[1];
-        if !positive(normal_speed) {
+        if !(normal_speed > absorber_core::flight::GRAZING) {
             return Ok(()); // grazing: no impulse, the ball flies on
         }
         let mut landing = Landing {
@@ -434,6 +504,7 @@ impl FullSolver {
             tangential_impulse: 0.0,
             bounced: false,
         };
+        let prior = s.clone();
         let before = [s.v[i1], s.v[i2]];
         // Pressed onto the track at a_p = ((0, −g_eff) − Ä)·n + v_t²/ρ.
         let end = 4 * self.n;
@@ -445,7 +516,7 @@ impl FullSolver {
             ball.landing_restitution,
             normal_speed,
             rho * ball.stick_speed,
-            pressed * self.params.integrator.step,
+            pressed * self.params.integrator.step.max(ball.min_bounce_time),
         );
         if bounces {
             landing.normal_impulse = self.bounce(s, n, normal_speed)?;
@@ -456,7 +527,13 @@ impl FullSolver {
             landing.tangential_impulse = p_t;
         }
         report.landing = Some(landing);
-        self.restart_acceleration(s, report)
+        report.events.landings += 1;
+        if s.contact == Contact::InFlight {
+            self.after_impulse(s, &prior);
+            Ok(())
+        } else {
+            self.restart_acceleration(s, report)
+        }
     }
 
     /// The bounce of the flying ball at `s` (on the circle, unit normal `n`, normal speed
@@ -471,15 +548,16 @@ impl FullSolver {
         grad[end - 3] = -n[1];
         grad[end + 1] = n[0];
         grad[end + 2] = n[1];
-        let y = self.metric_solve(s, mode, &grad)?;
+        let y = self.metric_solve(s, mode, &grad, false)?;
         let k: f64 = grad.iter().zip(y.iter()).map(|(g, y)| g * y).sum();
         if !positive(k) || !k.is_finite() {
             return Err(Error::Singular);
         }
-        let p = bounce_impulse(normal_speed, k, self.params.ball.landing_restitution);
+        let e_n = self.params.ball.landing_restitution;
         let mut vi = self.gather_ind(&s.v, mode);
-        vi.iter_mut().zip(y.iter()).for_each(|(v, y)| *v -= p * y);
         let ai = self.gather_ind(&s.a, mode);
+        let p = bounce_impulse(normal_speed, k, e_n);
+        vi.iter_mut().zip(y.iter()).for_each(|(v, y)| *v -= p * y);
         *s = self.complete(&qi, &vi, &ai, mode, s, s.time, s.base_accel, s.contact)?;
         Ok(p)
     }
@@ -533,7 +611,7 @@ impl FullSolver {
                 *r += kin.bd[row][k] * dj;
             }
         }
-        let y = self.metric_solve(&rolling, mode, &rhs)?;
+        let y = self.metric_solve(&rolling, mode, &rhs, false)?;
         vi.iter_mut().zip(y.iter()).for_each(|(v, y)| *v += y);
         *s = self.complete(
             &qi,
@@ -556,14 +634,14 @@ impl FullSolver {
 
     /// A stop met by the flying ball at `s` (spec "Stop in flight"): the centre rotated about A
     /// onto the stop line, a frictionless impulse along `∇α_f` towards the face met; the ball
-    /// flies on.
+    /// flies on, the accelerations go on from before the impulse.
     fn stop_in_flight(
         &self,
         s: &mut FullState,
         side: Side,
         inside: bool,
-        report: &mut StepReport<f64>,
     ) -> Result<Impact<f64>, Error> {
+        let prior = s.clone();
         let ball = &self.params.ball;
         let psi = s.q[self.zloc(PSI)];
         let rel = self.relative(s);
@@ -602,7 +680,7 @@ impl FullSolver {
             } else {
                 ball.restitution
             };
-            let y = self.metric_solve(s, mode, &grad)?;
+            let y = self.metric_solve(s, mode, &grad, true)?;
             let k: f64 = grad.iter().zip(y.iter()).map(|(g, y)| g * y).sum();
             if !positive(k) || !k.is_finite() {
                 return Err(Error::Singular);
@@ -615,7 +693,7 @@ impl FullSolver {
             impact.energy_loss = 0.5 * (1.0 - e * e) * speed * speed / k;
         }
         *s = self.complete(&qi, &vi, &ai, mode, s, s.time, s.base_accel, s.contact)?;
-        self.restart_acceleration(s, report)?;
+        self.after_impulse(s, &prior);
         Ok(impact)
     }
 

@@ -1801,6 +1801,17 @@ impl FullSolver {
 
     /// The Newton chain of a step of length `h`: `(κβh², κγh, 1)`, `κ = (1 − α_f)/(1 − α_m)`
     /// (`κ = 1` for Newmark; `absorber_core::newmark`).
+    /// How long an impulse of the over-step metric lasts \[s\]: the stop's contact time
+    /// (`ball.stop_contact_time`) for a `stop` impulse when it is set, else the step.
+    fn impulse_duration(&self, stop: bool) -> f64 {
+        let tau = self.params.ball.stop_contact_time;
+        if stop && tau > 0.0 {
+            tau
+        } else {
+            self.params.integrator.step
+        }
+    }
+
     fn step_chain(&self, h: f64) -> Chain<f64> {
         let it = &self.params.integrator;
         AlphaRecursion::chain(it, AlphaRecursion::of(it).as_ref(), h)
@@ -1890,6 +1901,9 @@ impl FullSolver {
             for i in 0..ni {
                 next.pa[self.ind_to_z(i)] = known[i] + g.ratio * a[i];
             }
+        }
+        if mode == Mode::Flying {
+            self.fly_exactly(s, h, &mut next);
         }
         Ok((next, solved))
     }
@@ -2019,14 +2033,16 @@ impl FullSolver {
             landing: None,
             work: 0,
             outcome: absorber_core::Outcome::Converged,
+            events: absorber_core::EventCounts::default(),
         };
         let next = if start.contact == Contact::InFlight {
             // In flight: a landing or a stop splits the step at the crossing (flight.rs).
             self.flight_events(start, trial, base_accel, &mut report)?
         } else {
             let next = self.stop_events(start, trial, h, base_accel, &mut report)?;
-            // Separation: a track that would pull the ball lets it fly.
-            if self.flies() && report.impact.is_none() {
+            // Separation: a track that would pull the ball lets it fly (after a stop impact, at
+            // the step's end).
+            if self.flies() {
                 self.separation(start, next, base_accel, &mut report)?
             } else {
                 next
@@ -2127,10 +2143,14 @@ impl FullSolver {
         } else {
             start.clone()
         };
+        let before = mid.clone();
         let impact = self.impact(&mut mid, side, inside)?;
-        let acc = self.consistent_acceleration(&mid)?;
-        report.iterations += acc.iterations;
-        mid = self.with_accel(&mid, &acc.x)?;
+        report.events.impacts += 1;
+        if !impact.stuck {
+            // The velocities jumped; the accelerations go on from before the impulse (the
+            // core's `System::after_impulse`).
+            self.after_impulse(&mut mid, &before);
+        }
         let rest = h - h1;
         let mut end = if rest > h * 1e-6 {
             let (e, s) = self.newmark(&mid, rest, base_accel)?;
@@ -2149,6 +2169,7 @@ impl FullSolver {
                 Side::Negative
             };
             end = self.rest_on_stop(&end, side2)?;
+            report.events.impacts += 1;
         }
         report.impact = Some(impact);
         Ok(end)
@@ -2215,9 +2236,8 @@ impl FullSolver {
         };
         if towards > 0.0 {
             let e = if plastic { 0.0 } else { ball.restitution };
-            let it = &self.params.integrator;
             let ch = if ball.impact_model == ImpactModel::OverStep {
-                self.step_chain(it.step)
+                self.step_chain(self.impulse_duration(true))
             } else {
                 Chain {
                     c_q: 0.0,
