@@ -88,8 +88,8 @@ for profile in fw fw-size; do
     done
 done
 
-# The stress set (profile fw): every scene on the free ball, three on every other bin. Each run
-# must reproduce the host's fingerprint (the firmware exits 0 only then).
+# The stress set (profile fw): every scene on the free ball, three on every other bin (six on the
+# estimator). Each run must reproduce the host's fingerprint (the firmware exits 0 only then).
 python3 scripts/embedded-report.py --stress-list >"$work/stress.tsv"
 while IFS=$'\t' read -r key scene stress; do
     stem=$work/stress-$key

@@ -150,6 +150,12 @@ pub struct Estimate<T> {
     pub report: StepReport<T>,
 }
 
+/// The error of a sensor range that is not finite and positive ([`Estimator::new_in`]).
+const RANGE: Error = Error::InvalidParameter {
+    field: "estimator.range",
+    reason: "must be finite and positive",
+};
+
 /// The estimator: a model of a scene with loads ([`crate::scene::Loaded`] or
 /// [`crate::scene::Arm`]) and a constant gain (module doc).
 #[derive(Clone, Debug)]
@@ -193,6 +199,39 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Estimator<T, S, N, D> {
             range,
             max_load: lit(MAX_LOAD),
         })
+    }
+
+    /// [`Estimator::new`] into caller storage, with no estimator and no model passing through
+    /// the stack (a firmware keeps it in a `static`, `docs/embedded.md`, boot RAM): the
+    /// undeformed model of `params` is written in place, then `start` brings it to the start
+    /// state the model given to `new` would have (e.g. [`Model::set_arm`],
+    /// [`Model::solve_static`], [`Model::restart`]). On error `slot` holds nothing usable: use
+    /// only the returned reference.
+    pub fn new_in(
+        slot: &mut core::mem::MaybeUninit<Self>,
+        params: crate::Params<T>,
+        start: impl FnOnce(&mut Model<T, S, N, D>) -> Result<(), Error>,
+        gain: Gain<T, D>,
+        section: RootSection<T>,
+        range: T,
+    ) -> Result<&mut Self, Error> {
+        gain.check()?;
+        if !is_positive(range) || !range.is_finite() {
+            return Err(RANGE);
+        }
+        Model::<T, S, N, D>::check_params(&params)?;
+        let e = slot.write(Self {
+            model: Model::fresh(params),
+            gain,
+            section,
+            load: T::zero(),
+            bias: T::zero(),
+            range,
+            max_load: lit(MAX_LOAD),
+        });
+        start(&mut e.model)?;
+        e.model.set_loads(&Loads::zero())?;
+        Ok(e)
     }
 
     /// The model (its state is the state estimate).
@@ -243,12 +282,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Estimator<T, S, N, D> {
     /// One sample: the base acceleration `base_accel` and the measured vertical tip
     /// acceleration `tip_accel` \[m/s²\], both at the end of the step. Errors (non-finite
     /// input, failed step, a correction that would leave the physical range) leave the
-    /// estimator unchanged.
+    /// estimator unchanged, but count as failed steps of the model's recovery rule
+    /// ([`Model::step`], "Recovery"): the [`crate::RESTART_AFTER`]-th in a row restarts the
+    /// model at rest (and a refused correction there also the load estimate at zero), so that
+    /// the next sample's innovation re-seeds the state from the measurement.
     pub fn update(&mut self, base_accel: T, tip_accel: T) -> Result<Estimate<T>, Error> {
         if !tip_accel.is_finite() {
             return Err(Error::NonFiniteInput);
         }
         let before = (*self.model.state(), self.load, self.bias);
+        let recovery = self.model.recovery();
         let prior = self.gain.load_decay * self.load;
         let loads = Loads {
             tip_force: prior,
@@ -275,14 +318,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Estimator<T, S, N, D> {
                 .chain(s.a.iter())
                 .all(|z| z.is_finite());
         if !finite || !load.is_finite() || load.abs() > self.max_load || !bias.is_finite() {
-            self.model.set_state(before.0);
+            if self.model.refuse_step((before.0, recovery), base_accel) {
+                self.load = T::zero();
+            }
             let _ = self.model.set_loads(&Loads {
-                tip_force: before.1,
+                tip_force: self.load,
                 line_load: [T::zero(); N],
             });
             return Err(Error::NonFiniteState);
         }
-        self.model.set_state(s);
+        self.model.correct_state(s);
         self.load = load;
         self.bias = bias;
         let moment = root_reaction_moment(&self.model);
@@ -306,10 +351,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Estimator<T, S, N, D> {
 mod tests {
     use super::*;
     use crate::loads::{ArmParams, PointMass, MAX_POINT_MASSES};
-    use crate::scene::{Arm, BeamOnly, FreeBall};
+    use crate::scene::{Arm, BeamOnly, FreeBall, Loaded};
     use crate::Params;
 
-    fn arm_model() -> Model<f64, Arm<BeamOnly>, 2, 8> {
+    fn arm_params() -> (Params<f64>, ArmParams<f64>) {
         let mut p = Params::<f64>::default();
         p.beam.length = 6.0;
         let arm = ArmParams {
@@ -322,6 +367,11 @@ mod tests {
                 mass: 0.0,
             }; MAX_POINT_MASSES],
         };
+        (p, arm)
+    }
+
+    fn arm_model() -> Model<f64, Arm<BeamOnly>, 2, 8> {
+        let (p, arm) = arm_params();
         Model::arm_at_rest(p, &arm, 0.0).expect("arm")
     }
 
@@ -382,6 +432,74 @@ mod tests {
         let before = (*e.model().state(), e.load(), e.bias());
         assert_eq!(e.update(0.0, f64::NAN).err(), Some(Error::NonFiniteInput));
         assert_eq!((*e.model().state(), e.load(), e.bias()), before);
+    }
+
+    /// Built in place, the estimator is the one `new` builds: the same start, and the same
+    /// states bit for bit over 50 corrected samples; its errors name the same fields.
+    #[test]
+    fn estimator_built_in_place_equals_the_one_built_by_value() {
+        let (p, arm) = arm_params();
+        let mut g = gain(0.95);
+        g.v = SVector::from_element(1e-3);
+        g.load = 0.5;
+        g.bias = 1e-2;
+        let mut by_value = Estimator::new(arm_model(), g, section(), 20.0).expect("valid");
+        let start = |m: &mut Model<f64, Arm<BeamOnly>, 2, 8>| {
+            m.set_arm(&arm)?;
+            m.solve_static()?;
+            m.restart(0.0)
+        };
+        let mut slot = core::mem::MaybeUninit::uninit();
+        let in_place = Estimator::new_in(&mut slot, p, start, g, section(), 20.0).expect("valid");
+        assert_eq!(in_place.model().state(), by_value.model().state());
+        for k in 0..50 {
+            let y = 0.3 * (0.2 * f64::from(k)).sin();
+            let a = by_value.update(0.1, y).expect("sample");
+            let b = in_place.update(0.1, y).expect("sample");
+            assert_eq!(a, b);
+            assert_eq!(in_place.model().state(), by_value.model().state());
+        }
+        let mut slot = core::mem::MaybeUninit::uninit();
+        let bad = Estimator::new_in(&mut slot, p, start, g, section(), f64::NAN).err();
+        assert!(matches!(
+            bad,
+            Some(Error::InvalidParameter {
+                field: "estimator.range",
+                ..
+            })
+        ));
+        let mut slot = core::mem::MaybeUninit::<Estimator<f64, Loaded<BeamOnly>, 2, 8>>::uninit();
+        let no_sections = Estimator::new_in(&mut slot, p, |m| m.set_arm(&arm), g, section(), 20.0);
+        assert!(matches!(
+            no_sections.err(),
+            Some(Error::InvalidParameter { field: "arm", .. })
+        ));
+    }
+
+    /// Refused corrections count as failed steps of the model's recovery rule: the first two
+    /// leave the estimator as it was, the third restarts it at rest (the load estimate at
+    /// zero, the clock at three samples), and the next sample is an ordinary one. Before,
+    /// each refusal reset the rule's count and one bad sample could be refused for ever.
+    #[test]
+    fn refused_corrections_restart_the_estimator_after_three_in_a_row() {
+        let mut g = gain(1.0);
+        g.load = 1.0e6; // an innovation of 5 m/s² asks for a 5 MN load: refused
+        let mut e = Estimator::new(arm_model(), g, section(), 20.0).expect("valid");
+        let start = *e.model().state();
+        for _ in 0..2 {
+            assert_eq!(e.update(0.0, 5.0).err(), Some(Error::NonFiniteState));
+            assert_eq!(e.model().state(), &start);
+        }
+        assert_eq!(e.update(0.0, 5.0).err(), Some(Error::NonFiniteState));
+        assert_eq!(e.model().restarts(), 1);
+        assert_eq!(e.load(), 0.0);
+        let s = *e.model().state();
+        assert_eq!((s.q, s.steps), (start.q, 3));
+        assert!(s.v.iter().all(|v| *v == 0.0));
+        let y = e.predicted_measurement(0.0);
+        let next = e.update(0.0, y).expect("an ordinary sample");
+        assert_eq!(next.report.outcome, crate::Outcome::Converged);
+        assert_eq!(e.model().state().steps, 4);
     }
 
     /// With a zero gain the estimator is the model: its state after a sample is a plain step's.

@@ -230,7 +230,7 @@ pub struct Model<T: Real, S: Scene, const N: usize, const D: usize> {
 
 /// The restart rule's counters.
 #[derive(Clone, Copy, Debug, Default)]
-struct Recovery {
+pub(crate) struct Recovery {
     /// Failed or capped steps in a row.
     run: u32,
     /// Of those, failed steps (their samples did not advance the state).
@@ -261,27 +261,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// Builds the model in the undeformed reference configuration, at rest, without solving
     /// the static equilibrium (see [`Model::at_rest`]).
     pub fn new(params: Params<T>) -> Result<Self, Error> {
-        #[allow(clippy::let_unit_value)]
-        let () = Self::CHECK;
-        params.validate(S::HAS_TIP, !matches!(S::BALL, BallKind::None))?;
-        let z = SVector::<T, D>::zeros();
-        Ok(Self {
-            sys: System::new(params),
-            state: State {
-                q: z,
-                v: z,
-                a: z,
-                pseudo_accel: z,
-                time: T::zero(),
-                steps: 0,
-                base_accel: T::zero(),
-                contact: Contact::Off,
-                flight: crate::flight::Flight::zero(),
-            },
-            work: Workspace::default(),
-            max_input: crate::scalar::lit(MAX_BASE_ACCEL),
-            recovery: Recovery::default(),
-        })
+        Self::check_params(&params)?;
+        Ok(Self::fresh(params))
     }
 
     /// Builds the model into caller storage, solves the static equilibrium and starts from it
@@ -306,11 +287,25 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         slot: &mut core::mem::MaybeUninit<Self>,
         params: Params<T>,
     ) -> Result<&mut Self, Error> {
+        Self::check_params(&params)?;
+        Ok(slot.write(Self::fresh(params)))
+    }
+
+    /// What [`Model::new`] checks: the element count and unknowns of the scene, the
+    /// parameters. A model built in a larger value's storage (the estimator's) checks first,
+    /// then writes [`Model::fresh`] in place.
+    pub(crate) fn check_params(params: &Params<T>) -> Result<(), Error> {
         #[allow(clippy::let_unit_value)]
         let () = Self::CHECK;
-        params.validate(S::HAS_TIP, !matches!(S::BALL, BallKind::None))?;
+        params.validate(S::HAS_TIP, !matches!(S::BALL, BallKind::None))
+    }
+
+    /// The undeformed model at rest from checked parameters ([`Model::check_params`]): a plain
+    /// value expression, inlined so that it is written straight into its destination.
+    #[inline(always)]
+    pub(crate) fn fresh(params: Params<T>) -> Self {
         let z = SVector::<T, D>::zeros();
-        let m = slot.write(Self {
+        Self {
             sys: System::new(params),
             state: State {
                 q: z,
@@ -326,8 +321,37 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             work: Workspace::default(),
             max_input: crate::scalar::lit(MAX_BASE_ACCEL),
             recovery: Recovery::default(),
-        });
-        Ok(m)
+        }
+    }
+
+    /// Gives an arm scene ([`crate::scene::Arm`]) the sections of `arm` in place of the uniform
+    /// beam's (the length and modulus of `params.beam` are used): [`Model::with_arm`] for a
+    /// model already built, e.g. in caller storage. The model is left undeformed: call
+    /// [`Model::solve_static`] and [`Model::restart`] after it. On error nothing changed.
+    pub fn set_arm(&mut self, arm: &crate::loads::ArmParams<T>) -> Result<(), Error> {
+        use crate::loads::SceneData as _;
+        let p = self.sys.params;
+        arm.validate(&p.beam)?;
+        let sections = self
+            .sys
+            .data
+            .sections_mut()
+            .ok_or(Error::InvalidParameter {
+                field: "arm",
+                reason: "the scene has no per-element sections (use scene::Arm<S>)",
+            })?;
+        for (k, sec) in sections.iter_mut().enumerate() {
+            *sec = crate::loads::arm_section(
+                arm,
+                &p.beam,
+                &p.calibration,
+                p.damping.stiffness_proportional,
+                k,
+                N,
+            );
+        }
+        self.work.clear();
+        Ok(())
     }
 
     /// The parameters.
@@ -537,10 +561,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             return report;
         }
         let r = &self.sys.rest;
+        // Samples so far: the state's (those it advanced through, this one if it was taken)
+        // and the failed ones of this run (this one if it failed).
         let steps = self
             .state
             .steps
-            .saturating_add(u64::from(self.recovery.kept) + 1);
+            .saturating_add(u64::from(self.recovery.kept));
         let mut a = r.a0;
         a.axpy(base_accel, &r.a1, T::one());
         self.state = State {
@@ -559,6 +585,41 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         self.recovery.kept = 0;
         self.recovery.restarts = self.recovery.restarts.saturating_add(1);
         report
+    }
+
+    /// Replaces the state just stepped to by a corrected one (an estimator's update), keeping
+    /// the recovery rule's count ([`Model::step`], "Recovery"): a run of far-capped steps goes
+    /// on counting through the corrections, where [`Model::set_state`] would end it.
+    pub(crate) fn correct_state(&mut self, state: State<T, D>) {
+        self.work.clear();
+        self.state = state;
+    }
+
+    /// The recovery rule's counters, to be handed back to [`Model::refuse_step`].
+    pub(crate) fn recovery(&self) -> Recovery {
+        self.recovery
+    }
+
+    /// Takes back the step just taken (an estimator refused its correction): the state and the
+    /// recovery rule's counters become `before`'s (taken just before the step), and the sample
+    /// counts as a failed step, so the [`RESTART_AFTER`]-th refusal or failure in a row
+    /// restarts the model at rest with the input `base_accel` ([`Model::step`], "Recovery";
+    /// a step that restarted the model is not taken back). Returns whether it restarted.
+    pub(crate) fn refuse_step(&mut self, before: (State<T, D>, Recovery), base_accel: T) -> bool {
+        if self.recovery.restarts != before.1.restarts {
+            self.work.clear();
+            return true;
+        }
+        self.recovery = before.1;
+        self.recovery.run += 1;
+        self.recovery.kept += 1;
+        self.state = before.0;
+        if self.recovery.run >= RESTART_AFTER {
+            let _ = self.recover(base_accel, self.work.used());
+            return true;
+        }
+        self.work.clear();
+        false
     }
 
     /// Restarts the model made itself since it was built ([`Model::step`], "Recovery").

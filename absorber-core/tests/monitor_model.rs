@@ -126,3 +126,34 @@ fn effectiveness_compares_with_the_locked_twin() {
     assert!(v.tip_peak >= v.tip_rms * std::f64::consts::SQRT_2 * 0.9);
     assert_eq!(mon.twin_failures(), 0);
 }
+
+/// Built in place (`Monitor::new_in`, a firmware's `static`), the monitor is the one `new`
+/// builds: the same stress, fatigue and window indicators, bit for bit, over 3000 samples of
+/// the paper's run at 4.13 Hz (impacts included).
+#[test]
+fn monitor_built_in_place_equals_the_one_built_by_value() {
+    let p = Params::<f32>::default();
+    let mut model = FreeBallModel::<f32, 3, 13>::at_rest(p, 0.0).unwrap();
+    let config = MonitorConfig::paper(&p).unwrap();
+    let mut by_value: Monitor<f32> = Monitor::new(config, &model).unwrap();
+    let mut slot = Box::new(std::mem::MaybeUninit::<Monitor<f32>>::uninit());
+    let in_place = Monitor::new_in(&mut slot, config, &model).unwrap();
+    for k in 1..=3000 {
+        let a = accel(4.13, k) as f32;
+        let r = model.step(a).unwrap();
+        assert_eq!(
+            by_value.record(&model, &r, a).unwrap().to_bits(),
+            in_place.record(&model, &r, a).unwrap().to_bits()
+        );
+    }
+    assert_eq!(by_value.fatigue(), in_place.fatigue());
+    assert_eq!(by_value.indicators(), in_place.indicators());
+    assert_eq!(by_value.static_root_stress(), in_place.static_root_stress());
+    assert_eq!(by_value.impacts().total(), in_place.impacts().total());
+    let bad = MonitorConfig {
+        gate: -1.0,
+        ..config
+    };
+    let mut slot = Box::new(std::mem::MaybeUninit::<Monitor<f32>>::uninit());
+    assert!(Monitor::new_in(&mut slot, bad, &model).is_err());
+}

@@ -414,13 +414,16 @@ impl<
         })
     }
 
-    /// The model in place, then the monitor written into its field (`Monitor::new` builds it by
-    /// value: one monitor on the stack, not the whole scene).
+    /// The model in place, then the monitor in place beside it (`Monitor::new_in`): neither
+    /// passes through the stack.
     fn init_in<'a>(slot: &'a mut MaybeUninit<Self>, setup: &Setup) -> Result<&'a mut Self, Error> {
         let p = firmware_params(setup);
         let model = Model::<f32, S, N, D>::at_rest_in(field!(slot, model), p, 0.0)?;
-        let monitor = Monitor::<f32, NoTwin, CAP, K, W>::new(MonitorConfig::paper(&p)?, model)?;
-        field!(slot, monitor).write(monitor);
+        Monitor::<f32, NoTwin, CAP, K, W>::new_in(
+            field!(slot, monitor),
+            MonitorConfig::paper(&p)?,
+            model,
+        )?;
         field!(slot, record_errors).write(0u32);
         // SAFETY: every field was just initialized.
         Ok(unsafe { slot.assume_init_mut() })

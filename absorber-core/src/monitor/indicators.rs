@@ -138,7 +138,9 @@ impl<T: Real, X: TwinValue<T>> Block<T, X> {
 }
 
 impl<T: Real, X: TwinValue<T>, const W: usize> Indicators<T, X, W> {
-    /// Window of `W` blocks of `block_len` ≥ 1 samples.
+    /// Window of `W` blocks of `block_len` ≥ 1 samples. Inlined: built straight into its
+    /// destination (a monitor built in place, `crate::monitor::Monitor::new_in`).
+    #[inline(always)]
     pub fn new(block_len: u16) -> Self {
         Self {
             block_len: block_len.max(1),

@@ -97,6 +97,47 @@ impl<T: Real, const N: usize, const D: usize> Twin<T> for Model<T, LockedBall, N
     }
 }
 
+/// What a monitor takes from `model` at its start (its first sample): the root stress of the
+/// state and of the static equilibrium (`config`'s section and moment estimate, checked
+/// finite), the equilibrium's strain energy and heights, the time and whether the ball flies.
+struct Start<T> {
+    stress: T,
+    static_stress: T,
+    static_strain: T,
+    static_heights: Heights<T>,
+    time: T,
+    in_flight: bool,
+}
+
+impl<T: Real> Start<T> {
+    fn of<S: Scene, const N: usize, const D: usize>(
+        config: &MonitorConfig<T>,
+        model: &Model<T, S, N, D>,
+    ) -> Result<Self, Error> {
+        let section = config.section;
+        let estimate = config.moment;
+        let stress = section.stress_of_moment(section.root_moment(model, estimate));
+        let static_moment = match estimate {
+            MomentEstimate::Reaction => static_root_moment(model),
+            MomentEstimate::Curvature => {
+                section.moment(root_curvature_of(model, model.equilibrium()))
+            }
+        };
+        let static_stress = section.stress_of_moment(static_moment);
+        if !stress.is_finite() || !static_stress.is_finite() {
+            return Err(Error::NonFiniteState);
+        }
+        Ok(Self {
+            stress,
+            static_stress,
+            static_strain: model.strain_energy_of(model.equilibrium()),
+            static_heights: model.equilibrium_heights(),
+            time: model.time(),
+            in_flight: model.in_flight(),
+        })
+    }
+}
+
 /// Monitor settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MonitorConfig<T> {
@@ -186,6 +227,15 @@ impl<T: Real, const CAP: usize, const K: usize, const W: usize> Monitor<T, NoTwi
     ) -> Result<Self, Error> {
         Self::with_twin(config, model, NoTwin)
     }
+
+    /// [`Monitor::new`] into caller storage ([`Monitor::with_twin_in`]).
+    pub fn new_in<'a, S: Scene, const N: usize, const D: usize>(
+        slot: &'a mut core::mem::MaybeUninit<Self>,
+        config: MonitorConfig<T>,
+        model: &Model<T, S, N, D>,
+    ) -> Result<&'a mut Self, Error> {
+        Self::with_twin_in(slot, config, model, NoTwin)
+    }
 }
 
 impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
@@ -197,48 +247,73 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
         model: &Model<T, S, N, D>,
         twin: Tw,
     ) -> Result<Self, Error> {
-        let section = config.section;
-        let estimate = config.moment;
-        let stress = section.stress_of_moment(section.root_moment(model, estimate));
-        let static_moment = match estimate {
-            MomentEstimate::Reaction => static_root_moment(model),
-            MomentEstimate::Curvature => {
-                section.moment(root_curvature_of(model, model.equilibrium()))
-            }
-        };
-        let static_stress = section.stress_of_moment(static_moment);
-        if !stress.is_finite() || !static_stress.is_finite() {
-            return Err(Error::NonFiniteState);
-        }
-        let mut rainflow = Rainflow::new(config.gate)?;
-        let mut miner = Miner::new(config.curve)?;
-        rainflow.push(stress, &mut |c| miner.add(&c))?;
-        Ok(Self {
-            section,
-            estimate,
+        let start = Start::of(&config, model)?;
+        let stress = start.stress;
+        let counters = (Rainflow::new(config.gate)?, Miner::new(config.curve)?);
+        let mut m = Self::fresh(&config, twin, counters, start);
+        m.first_sample(stress)?;
+        Ok(m)
+    }
+
+    /// [`Monitor::with_twin`] into caller storage: no monitor passes through the stack (its
+    /// window alone is `W` blocks; a firmware keeps it in a `static`, `docs/embedded.md`, boot
+    /// RAM). The twin is moved in. On error `slot` holds nothing usable: use only the returned
+    /// reference.
+    pub fn with_twin_in<'a, S: Scene, const N: usize, const D: usize>(
+        slot: &'a mut core::mem::MaybeUninit<Self>,
+        config: MonitorConfig<T>,
+        model: &Model<T, S, N, D>,
+        twin: Tw,
+    ) -> Result<&'a mut Self, Error> {
+        let start = Start::of(&config, model)?;
+        let stress = start.stress;
+        let counters = (Rainflow::new(config.gate)?, Miner::new(config.curve)?);
+        let m = slot.write(Self::fresh(&config, twin, counters, start));
+        m.first_sample(stress)?;
+        Ok(m)
+    }
+
+    /// The monitor before its first sample, from its checked counters: a value expression,
+    /// inlined so that it is written straight into its destination.
+    #[inline(always)]
+    fn fresh(
+        config: &MonitorConfig<T>,
+        twin: Tw,
+        (rainflow, miner): (Rainflow<T, CAP>, Miner<T>),
+        start: Start<T>,
+    ) -> Self {
+        Self {
+            section: config.section,
+            estimate: config.moment,
             rainflow,
             miner,
             impacts: ImpactLog::new(),
             window: Indicators::new(config.block),
             twin,
-            static_strain: model.strain_energy_of(model.equilibrium()),
-            static_heights: model.equilibrium_heights(),
-            static_stress,
-            stress,
-            start_time: model.time(),
-            time: model.time(),
+            static_strain: start.static_strain,
+            static_heights: start.static_heights,
+            static_stress: start.static_stress,
+            stress: start.stress,
+            start_time: start.time,
+            time: start.time,
             samples: 1,
             rejected: 0,
             twin_failures: 0,
             flight: FlightLog {
-                samples_in_flight: u64::from(model.in_flight()),
+                samples_in_flight: u64::from(start.in_flight),
                 separations: 0,
                 landings: 0,
                 bounces: 0,
                 peak_rolling_friction: T::zero(),
                 peak_landing_friction: T::zero(),
             },
-        })
+        }
+    }
+
+    /// The model's state as the first sample: its stress into the rainflow count.
+    fn first_sample(&mut self, stress: T) -> Result<(), Error> {
+        let miner = &mut self.miner;
+        self.rainflow.push(stress, &mut |c| miner.add(&c))
     }
 
     /// Records the model's state after a step: `report` is what [`Model::step`] returned and
