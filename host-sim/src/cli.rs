@@ -3,7 +3,7 @@
 
 use crate::scene::{ExcitationType, Kind, Plot, Precision, Scene, Solver};
 use absorber_core::monitor::DetailCategory;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -193,9 +193,15 @@ pub struct SceneArgs {
 }
 
 impl SceneArgs {
-    /// Loads the scene and applies the overrides.
+    /// Loads the scene and applies the overrides, then validates the result (a scene value that
+    /// an override replaces is never held against it).
     pub fn load(&self) -> Result<Scene> {
-        self.apply(Scene::load(&self.scene)?)
+        let spec = &self.scene;
+        let s = self.apply(Scene::read(spec)?);
+        if spec == "paper" {
+            return s;
+        }
+        s.with_context(|| format!("scene `{spec}`"))
     }
 
     /// Applies the overrides to a loaded scene (`self.scene` is not read) and validates it
@@ -466,6 +472,45 @@ pub struct IdentifyArgs {
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,
+}
+
+/// The command line with every `--option <negative number>` written `--option=<negative
+/// number>`, so that a negative value in any notation reaches the option's own check (which
+/// names the allowed range): clap takes `-1e-3` or `-1,4` for a short flag otherwise and reports
+/// an "unexpected argument".
+pub fn with_negative_numbers(
+    args: impl IntoIterator<Item = std::ffi::OsString>,
+) -> Vec<std::ffi::OsString> {
+    let negative = |a: &str| {
+        let rest = a.strip_prefix('-').unwrap_or("");
+        rest.starts_with(|c: char| c.is_ascii_digit() || c == '.')
+            && rest
+                .chars()
+                .all(|c| c.is_ascii_digit() || ".eE+-,".contains(c))
+            || ["inf", "infinity", "nan"].contains(&rest.to_ascii_lowercase().as_str())
+    };
+    let mut out: Vec<std::ffi::OsString> = Vec::new();
+    for a in args {
+        let joined = match (out.last().and_then(|p| p.to_str()), a.to_str()) {
+            (Some(prev), Some(v))
+                if prev.starts_with("--")
+                    && !prev.contains('=')
+                    && prev.len() > 2
+                    && negative(v) =>
+            {
+                Some(format!("{prev}={v}"))
+            }
+            _ => None,
+        };
+        match joined {
+            Some(j) => {
+                out.pop();
+                out.push(j.into());
+            }
+            None => out.push(a),
+        }
+    }
+    out
 }
 
 /// Runs the parsed command line.
