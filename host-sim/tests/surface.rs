@@ -93,6 +93,13 @@ fn errors_name_the_key_users_write() {
         &run(&["static", "--scene", scene.to_str().unwrap()]),
         &["`arm.heads[1].position`", "21", "16.76"],
     );
+    // Before: `max_iterations = 1` was blamed on `integrator.tolerance`.
+    let scene = tmp("one-iteration.toml");
+    std::fs::write(&scene, "[integrator]\nmax_iterations = 1\n").unwrap();
+    refused(
+        &run(&["static", "--scene", scene.to_str().unwrap()]),
+        &["`integrator.max_iterations`", "too few"],
+    );
     let out = tmp("validation");
     refused(
         &run(&[
