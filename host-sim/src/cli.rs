@@ -39,7 +39,7 @@ pub enum Command {
     Static(InfoArgs),
     /// Natural frequencies about the static equilibrium [Hz].
     Modes(ModesArgs),
-    /// Time history of a scene: CSV and PNG plots (paper Figs. 8–23).
+    /// Time history of a scene: CSV and PNG plots (paper Figs. 11–23).
     ///
     /// Writes `<out>/<name>.csv`, one row per step (every n-th with --every), SI units, angles
     /// in rad, documented in the file's `#` header: t [s]; base_y = y_b [m]; tip_y = y_b +
@@ -160,10 +160,45 @@ pub struct ValidationArgs {
     pub converged: usize,
 }
 
+/// Scene selection and the overrides of the model alone (`static`, `modes`, `tune`: no
+/// excitation, duration or step, which they do not use).
+#[derive(Args, Debug, Clone, Default)]
+pub struct ModelArgs {
+    /// `paper` (built in) or a scene TOML file (e.g. `scenes/mast-arm.toml`).
+    #[arg(long, short, default_value = "paper")]
+    pub scene: String,
+    /// Solver (overrides the scene).
+    #[arg(long, value_enum)]
+    pub solver: Option<Solver>,
+    /// Bodies (overrides the scene).
+    #[arg(long, value_enum)]
+    pub kind: Option<Kind>,
+    /// Beam elements: core 1, 2, 3, 4, 6, 8 or 16; full any (overrides the scene).
+    #[arg(long)]
+    pub elements: Option<usize>,
+    /// Scalar (overrides the scene).
+    #[arg(long, value_enum)]
+    pub precision: Option<Precision>,
+}
+
+impl ModelArgs {
+    /// The same selection as [`SceneArgs`] (no run overrides).
+    pub fn scene_args(&self) -> SceneArgs {
+        SceneArgs {
+            scene: self.scene.clone(),
+            solver: self.solver,
+            kind: self.kind,
+            elements: self.elements,
+            precision: self.precision,
+            ..SceneArgs::default()
+        }
+    }
+}
+
 /// Scene selection and overrides shared by all commands.
 #[derive(Args, Debug, Clone, Default)]
 pub struct SceneArgs {
-    /// `paper` (built in) or a scene TOML file.
+    /// `paper` (built in) or a scene TOML file (e.g. `scenes/mast-arm.toml`).
     #[arg(long, short, default_value = "paper")]
     pub scene: String,
     /// Solver (overrides the scene).
@@ -243,7 +278,7 @@ impl SceneArgs {
 #[derive(Args, Debug)]
 pub struct InfoArgs {
     #[command(flatten)]
-    pub scene: SceneArgs,
+    pub scene: ModelArgs,
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,
@@ -253,7 +288,7 @@ pub struct InfoArgs {
 #[derive(Args, Debug)]
 pub struct ModesArgs {
     #[command(flatten)]
-    pub scene: SceneArgs,
+    pub scene: ModelArgs,
     /// How many of the lowest frequencies to print.
     #[arg(long, default_value_t = 4)]
     pub count: usize,
@@ -316,7 +351,7 @@ pub struct SweepArgs {
 #[derive(Args, Debug)]
 pub struct TuneArgs {
     #[command(flatten)]
-    pub scene: SceneArgs,
+    pub scene: ModelArgs,
     /// Target ball / beam frequency ratio.
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub ratio: f64,

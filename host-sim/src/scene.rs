@@ -738,8 +738,22 @@ impl Scene {
             return Ok(Self::paper());
         }
         let path = Path::new(spec);
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("cannot read scene `{spec}`"))?;
+        let text = std::fs::read_to_string(path).with_context(|| {
+            // A bare name: the shipped scene of that name, if there is one here.
+            let shipped = Path::new("scenes").join(format!("{spec}.toml"));
+            if path.extension().is_none() && shipped.is_file() {
+                format!(
+                    "cannot read scene `{spec}` (the only built-in scene is `paper`; did you mean `{}`?)",
+                    shipped.display()
+                )
+            } else if path.extension().is_none() {
+                format!(
+                    "cannot read scene `{spec}` (the only built-in scene is `paper`; others are TOML files, e.g. `scenes/tuned.toml` in the repository)"
+                )
+            } else {
+                format!("cannot read scene `{spec}`")
+            }
+        })?;
         let file = parse(&text).with_context(|| format!("scene `{spec}`"))?;
         let base_dir = path
             .parent()
