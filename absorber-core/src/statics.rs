@@ -65,9 +65,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The error of a static solve that failed at every load step: when Newton ended within a
     /// few hundred tolerances of convergence it stagnates at the rounding floor of the stiffness
     /// (condition ∝ N⁴: f32 stalls at 1.2e-4 with 64 elements), which is a tolerance this
-    /// precision cannot meet, not a hard load step.
+    /// precision cannot meet, not a hard load step; with fewer than 10 iterations allowed, the
+    /// budget is the cause.
     fn static_failure(e: Error, tolerance: T) -> Error {
         match e {
+            // A budget of a few iterations cannot converge from the unloaded beam at all.
+            Error::NoConvergence { iterations, .. } if iterations < 10 => Error::InvalidParameter {
+                field: "integrator.max_iterations",
+                reason: "is too few for the static equilibrium (Newton from the unloaded beam needs up to about 10; the default is 100)",
+            },
             Error::NoConvergence { increment, .. } if increment < 300.0 * to_f64(tolerance) => {
                 Error::InvalidParameter {
                     field: "integrator.tolerance",

@@ -201,7 +201,8 @@ typedef enum AbsorberStatus {
      */
     ABSORBER_STATUS_INVALID_PARAMETER = 1,
     /**
-     * The base acceleration is NaN or infinite; state unchanged.
+     * The base acceleration (or another number passed in) is NaN or infinite; state unchanged,
+     * nothing written.
      */
     ABSORBER_STATUS_NON_FINITE_INPUT = 2,
     /**
@@ -1338,9 +1339,11 @@ enum AbsorberStatus absorber_init(void *storage,
                                   struct AbsorberError *error);
 
 /**
- * A short, static, NUL-terminated name of a status (`"ok"`, `"invalid parameter"`, …).
+ * A short, static, NUL-terminated name of a status (`"ok"`, `"invalid parameter"`, …);
+ * `"unknown status"` for a value that is none (the argument is the status's integer value, so
+ * that any value C can pass is defined behaviour).
  */
-const char *absorber_status_name(enum AbsorberStatus status);
+const char *absorber_status_name(int32_t status);
 
 /**
  * Advances a `float` model by one step h to the new base acceleration ÿ_b(t + h) \[m/s²\]
@@ -1402,7 +1405,8 @@ enum AbsorberStatus absorber_outputs_f64(const struct AbsorberModel *model,
 
 /**
  * Energies of a `float` model's bodies \[J\]; pass the base velocity \[m/s\] and displacement
- * \[m\] for absolute kinetic energies, or 0 and 0 for the frame moving with the base.
+ * \[m\] for absolute kinetic energies, or 0 and 0 for the frame moving with the base
+ * (`ABSORBER_STATUS_NON_FINITE_INPUT` and nothing written if either is not finite).
  *
  * # Safety
  * `model` is a live handle of [`absorber_init`]; `out` valid for a write.

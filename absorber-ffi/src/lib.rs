@@ -227,7 +227,8 @@ pub enum AbsorberStatus {
     Ok = 0,
     /// A parameter is out of range; [`AbsorberError::field`] names it.
     InvalidParameter = 1,
-    /// The base acceleration is NaN or infinite; state unchanged.
+    /// The base acceleration (or another number passed in) is NaN or infinite; state unchanged,
+    /// nothing written.
     NonFiniteInput = 2,
     /// The base acceleration is beyond ±1e4 m/s² (a sensor fault); state unchanged.
     InputOutOfRange = 3,
@@ -1335,9 +1336,39 @@ pub unsafe extern "C" fn absorber_init(
     }
 }
 
-/// A short, static, NUL-terminated name of a status (`"ok"`, `"invalid parameter"`, …).
+impl AbsorberStatus {
+    /// Every status, in the order of their values.
+    const ALL: [AbsorberStatus; 14] = [
+        AbsorberStatus::Ok,
+        AbsorberStatus::InvalidParameter,
+        AbsorberStatus::NonFiniteInput,
+        AbsorberStatus::InputOutOfRange,
+        AbsorberStatus::NoConvergence,
+        AbsorberStatus::NonFiniteState,
+        AbsorberStatus::Singular,
+        AbsorberStatus::NullPointer,
+        AbsorberStatus::Storage,
+        AbsorberStatus::Variant,
+        AbsorberStatus::Precision,
+        AbsorberStatus::NotInitialized,
+        AbsorberStatus::BufferTooSmall,
+        AbsorberStatus::Other,
+    ];
+
+    /// The status whose value is `raw`, if there is one.
+    fn from_raw(raw: i32) -> Option<AbsorberStatus> {
+        Self::ALL.into_iter().find(|s| *s as i32 == raw)
+    }
+}
+
+/// A short, static, NUL-terminated name of a status (`"ok"`, `"invalid parameter"`, …);
+/// `"unknown status"` for a value that is none (the argument is the status's integer value, so
+/// that any value C can pass is defined behaviour).
 #[no_mangle]
-pub extern "C" fn absorber_status_name(status: AbsorberStatus) -> *const c_char {
+pub extern "C" fn absorber_status_name(status: i32) -> *const c_char {
+    let Some(status) = AbsorberStatus::from_raw(status) else {
+        return c"unknown status".as_ptr();
+    };
     let s: &'static core::ffi::CStr = match status {
         AbsorberStatus::Ok => c"ok",
         AbsorberStatus::InvalidParameter => c"invalid parameter",
@@ -1551,7 +1582,8 @@ pub unsafe extern "C" fn absorber_outputs_f64(
 }
 
 /// Energies of a `float` model's bodies \[J\]; pass the base velocity \[m/s\] and displacement
-/// \[m\] for absolute kinetic energies, or 0 and 0 for the frame moving with the base.
+/// \[m\] for absolute kinetic energies, or 0 and 0 for the frame moving with the base
+/// (`ABSORBER_STATUS_NON_FINITE_INPUT` and nothing written if either is not finite).
 ///
 /// # Safety
 /// `model` is a live handle of [`absorber_init`]; `out` valid for a write.
@@ -1565,6 +1597,9 @@ pub unsafe extern "C" fn absorber_energies_f32(
     // SAFETY: forwarded.
     unsafe {
         read::<f32, _>(model, out, |m| {
+            if !(base_velocity.is_finite() && base_displacement.is_finite()) {
+                return Err(AbsorberStatus::NonFiniteInput);
+            }
             Ok(m.energies(base_velocity, base_displacement))
         })
     }
@@ -1584,6 +1619,9 @@ pub unsafe extern "C" fn absorber_energies_f64(
     // SAFETY: forwarded.
     unsafe {
         read::<f64, _>(model, out, |m| {
+            if !(base_velocity.is_finite() && base_displacement.is_finite()) {
+                return Err(AbsorberStatus::NonFiniteInput);
+            }
             Ok(m.energies(base_velocity, base_displacement))
         })
     }

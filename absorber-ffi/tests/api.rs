@@ -517,7 +517,43 @@ fn wrong_handles_and_inputs_are_errors_and_keep_the_state() {
             absorber_state_f32(m, null_mut(), q.as_mut_ptr(), null_mut(), null_mut(), 4),
             AbsorberStatus::BufferTooSmall
         );
-        let name = CStr::from_ptr(absorber_status_name(AbsorberStatus::Precision));
+        let name = CStr::from_ptr(absorber_status_name(AbsorberStatus::Precision as i32));
         assert_eq!(name.to_str(), Ok("wrong precision"));
+    }
+}
+
+/// Every function is total over what C can pass: a status value that is none (C allows any
+/// int in an enum; before, `absorber_status_name(999)` read a jump table out of bounds and
+/// crashed) and non-finite numbers (before, `absorber_energies_f32(m, NAN, NAN, &o)` returned
+/// OK with 7 of 8 outputs NaN).
+#[test]
+fn out_of_range_statuses_and_non_finite_numbers_are_defined() {
+    for raw in [-1, 14, 999, i32::MIN, i32::MAX] {
+        // SAFETY: the function returns a static NUL-terminated string for any value.
+        let name = unsafe { CStr::from_ptr(absorber_status_name(raw)) };
+        assert_eq!(name.to_str(), Ok("unknown status"), "{raw}");
+    }
+    for raw in 0..14 {
+        // SAFETY: as above.
+        let name = unsafe { CStr::from_ptr(absorber_status_name(raw)) };
+        assert_ne!(name.to_str(), Ok("unknown status"), "{raw}");
+    }
+    let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
+    let (_, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &defaults());
+    let mut e = AbsorberEnergiesF32::default();
+    // SAFETY: live handle, valid output.
+    unsafe {
+        assert_eq!(
+            absorber_energies_f32(m, 0.0, 0.0, &mut e),
+            AbsorberStatus::Ok
+        );
+        let good = e;
+        for (v, d) in [(f32::NAN, 0.0), (0.0, f32::INFINITY), (f32::NAN, f32::NAN)] {
+            assert_eq!(
+                absorber_energies_f32(m, v, d, &mut e),
+                AbsorberStatus::NonFiniteInput
+            );
+            assert_eq!(e, good, "nothing written");
+        }
     }
 }

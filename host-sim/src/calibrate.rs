@@ -155,6 +155,8 @@ pub struct Fit {
     pub reference: Characteristics,
     /// Levenberg–Marquardt iterations.
     pub iterations: u32,
+    /// The fit stopped at its iteration cap while still improving.
+    pub capped: bool,
 }
 
 impl Fit {
@@ -168,6 +170,9 @@ impl Fit {
 }
 
 const BENDING: (f64, f64) = (0.5, 2.0);
+
+/// Levenberg–Marquardt iterations of [`fit`], at most.
+const MAX_ITERATIONS: u32 = 100;
 const AXIAL: (f64, f64) = (1e-6, 1.0);
 
 /// x = (ln κ_b, ln κ_a, μ) → calibration, clamped into the valid box.
@@ -208,7 +213,8 @@ pub fn fit(
     let mut r = eval(&x)?;
     let mut lambda = 1e-3;
     let mut iterations = 0;
-    for _ in 0..100 {
+    let mut capped = true;
+    for _ in 0..MAX_ITERATIONS {
         iterations += 1;
         // Forward-difference Jacobian (the eigenvalues are accurate to ~1e-12 relative).
         let h = 1e-6;
@@ -255,6 +261,7 @@ pub fn fit(
             }
         }
         if !improved || cost(&r).sqrt() < 1e-9 {
+            capped = false;
             break;
         }
     }
@@ -268,6 +275,7 @@ pub fn fit(
         uncalibrated,
         reference: *reference,
         iterations,
+        capped,
     })
 }
 

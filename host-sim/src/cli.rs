@@ -3,7 +3,7 @@
 
 use crate::scene::{ExcitationType, Kind, Plot, Precision, Scene, Solver};
 use absorber_core::monitor::DetailCategory;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -39,7 +39,7 @@ pub enum Command {
     Static(InfoArgs),
     /// Natural frequencies about the static equilibrium [Hz].
     Modes(ModesArgs),
-    /// Time history of a scene: CSV and PNG plots (paper Figs. 8–23).
+    /// Time history of a scene: CSV and PNG plots (paper Figs. 11–23).
     ///
     /// Writes `<out>/<name>.csv`, one row per step (every n-th with --every), SI units, angles
     /// in rad, documented in the file's `#` header: t [s]; base_y = y_b [m]; tip_y = y_b +
@@ -160,10 +160,45 @@ pub struct ValidationArgs {
     pub converged: usize,
 }
 
+/// Scene selection and the overrides of the model alone (`static`, `modes`, `tune`: no
+/// excitation, duration or step, which they do not use).
+#[derive(Args, Debug, Clone, Default)]
+pub struct ModelArgs {
+    /// `paper` (built in) or a scene TOML file (e.g. `scenes/mast-arm.toml`).
+    #[arg(long, short, default_value = "paper")]
+    pub scene: String,
+    /// Solver (overrides the scene).
+    #[arg(long, value_enum)]
+    pub solver: Option<Solver>,
+    /// Bodies (overrides the scene).
+    #[arg(long, value_enum)]
+    pub kind: Option<Kind>,
+    /// Beam elements: core 1, 2, 3, 4, 6, 8 or 16; full any (overrides the scene).
+    #[arg(long)]
+    pub elements: Option<usize>,
+    /// Scalar (overrides the scene).
+    #[arg(long, value_enum)]
+    pub precision: Option<Precision>,
+}
+
+impl ModelArgs {
+    /// The same selection as [`SceneArgs`] (no run overrides).
+    pub fn scene_args(&self) -> SceneArgs {
+        SceneArgs {
+            scene: self.scene.clone(),
+            solver: self.solver,
+            kind: self.kind,
+            elements: self.elements,
+            precision: self.precision,
+            ..SceneArgs::default()
+        }
+    }
+}
+
 /// Scene selection and overrides shared by all commands.
 #[derive(Args, Debug, Clone, Default)]
 pub struct SceneArgs {
-    /// `paper` (built in) or a scene TOML file.
+    /// `paper` (built in) or a scene TOML file (e.g. `scenes/mast-arm.toml`).
     #[arg(long, short, default_value = "paper")]
     pub scene: String,
     /// Solver (overrides the scene).
@@ -193,9 +228,15 @@ pub struct SceneArgs {
 }
 
 impl SceneArgs {
-    /// Loads the scene and applies the overrides.
+    /// Loads the scene and applies the overrides, then validates the result (a scene value that
+    /// an override replaces is never held against it).
     pub fn load(&self) -> Result<Scene> {
-        self.apply(Scene::load(&self.scene)?)
+        let spec = &self.scene;
+        let s = self.apply(Scene::read(spec)?);
+        if spec == "paper" {
+            return s;
+        }
+        s.with_context(|| format!("scene `{spec}`"))
     }
 
     /// Applies the overrides to a loaded scene (`self.scene` is not read) and validates it
@@ -237,7 +278,7 @@ impl SceneArgs {
 #[derive(Args, Debug)]
 pub struct InfoArgs {
     #[command(flatten)]
-    pub scene: SceneArgs,
+    pub scene: ModelArgs,
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,
@@ -247,7 +288,7 @@ pub struct InfoArgs {
 #[derive(Args, Debug)]
 pub struct ModesArgs {
     #[command(flatten)]
-    pub scene: SceneArgs,
+    pub scene: ModelArgs,
     /// How many of the lowest frequencies to print.
     #[arg(long, default_value_t = 4)]
     pub count: usize,
@@ -310,7 +351,7 @@ pub struct SweepArgs {
 #[derive(Args, Debug)]
 pub struct TuneArgs {
     #[command(flatten)]
-    pub scene: SceneArgs,
+    pub scene: ModelArgs,
     /// Target ball / beam frequency ratio.
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub ratio: f64,
@@ -466,6 +507,45 @@ pub struct IdentifyArgs {
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,
+}
+
+/// The command line with every `--option <negative number>` written `--option=<negative
+/// number>`, so that a negative value in any notation reaches the option's own check (which
+/// names the allowed range): clap takes `-1e-3` or `-1,4` for a short flag otherwise and reports
+/// an "unexpected argument".
+pub fn with_negative_numbers(
+    args: impl IntoIterator<Item = std::ffi::OsString>,
+) -> Vec<std::ffi::OsString> {
+    let negative = |a: &str| {
+        let rest = a.strip_prefix('-').unwrap_or("");
+        rest.starts_with(|c: char| c.is_ascii_digit() || c == '.')
+            && rest
+                .chars()
+                .all(|c| c.is_ascii_digit() || ".eE+-,".contains(c))
+            || ["inf", "infinity", "nan"].contains(&rest.to_ascii_lowercase().as_str())
+    };
+    let mut out: Vec<std::ffi::OsString> = Vec::new();
+    for a in args {
+        let joined = match (out.last().and_then(|p| p.to_str()), a.to_str()) {
+            (Some(prev), Some(v))
+                if prev.starts_with("--")
+                    && !prev.contains('=')
+                    && prev.len() > 2
+                    && negative(v) =>
+            {
+                Some(format!("{prev}={v}"))
+            }
+            _ => None,
+        };
+        match joined {
+            Some(j) => {
+                out.pop();
+                out.push(j.into());
+            }
+            None => out.push(a),
+        }
+    }
+    out
 }
 
 /// Runs the parsed command line.

@@ -299,6 +299,9 @@ impl Run {
             *max_range = max_range.max(c.range);
         };
         for k in 0..=self.steps {
+            if k % 500 == 0 {
+                crate::interrupt::check()?;
+            }
             if k > 0 {
                 let t = k as f64 * h;
                 let (tip_force, line) = self.loads.sample(t, N);

@@ -68,6 +68,118 @@ pub struct Identified {
     pub triggers: usize,
     /// RMS of the fit residual over RMS of the fitted signal \[-\].
     pub residual_ratio: f64,
+    /// `usable`, or `unusable` with the [`Identified::reasons`] (the quality gate,
+    /// [`Identified::check`]); `calibrate --from-identified` refuses an unusable result.
+    #[serde(default)]
+    pub verdict: Verdict,
+    /// Why the result is unusable (empty when usable).
+    #[serde(default)]
+    pub reasons: Vec<String>,
+}
+
+/// The quality gate's verdict on an identified pole.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Verdict {
+    /// Every check of [`Identified::check`] passed (also what a file written before the gate
+    /// reads as; `calibrate` checks its numbers again).
+    #[default]
+    Usable,
+    /// At least one check failed: the numbers are not a pole of the record.
+    Unusable,
+}
+
+/// Largest fit residual (RMS of the residual over RMS of the fitted signal) of a usable result.
+/// A damped sinusoid fitted to a lightly damped mode leaves the noise of its band: 0.002–0.06 on
+/// records with a clear mode (the tests' and the project's records); a fifth of the signal left
+/// unexplained (a signal-to-noise ratio below 14 dB in the passband) means the "mode" is noise
+/// or several modes, and white noise gives 0.3–1.
+pub const MAX_RESIDUAL: f64 = 0.2;
+
+/// Largest relative 1σ uncertainty of f₁ in a usable result: a measured pole is known to a few
+/// per mille; ±5 % is no longer a frequency to calibrate a model to.
+pub const MAX_F1_UNCERTAINTY: f64 = 0.05;
+
+/// Bounds of ζ the fit is held in ([`fit_decay`]); a result on one of them is the bound, not a
+/// measurement (a growing oscillation ends on the lower one).
+const ZETA_BOUNDS: (f64, f64) = (1e-6, 0.5);
+
+/// Largest record `identify` reads \[samples\]: the fit holds the record and its zero-padded
+/// spectra in memory, about 100 bytes per sample at this size (0.4 GB); a free decay needs a few
+/// hundred periods of the mode and an ambient record a few thousand, i.e. far fewer samples at
+/// any useful sampling rate: decimate or cut a longer record.
+pub const MAX_SAMPLES: usize = 1 << 22;
+
+impl Identified {
+    /// The quality gate: the reasons this result is not a pole of the record (empty: usable).
+    /// `band` is the search band \[Hz\].
+    pub fn check(&self, band: Option<(f64, f64)>) -> Vec<String> {
+        let mut why = Vec::new();
+        if !(self.f1.is_finite() && self.f1 > 0.0 && self.zeta.is_finite()) {
+            why.push(format!(
+                "f1 = {} Hz, zeta = {} are not finite",
+                self.f1, self.zeta
+            ));
+            return why;
+        }
+        if !(self.f1_uncertainty.is_finite() && self.zeta_uncertainty.is_finite()) {
+            why.push(format!(
+                "an uncertainty is not finite (f1 ± {} Hz, zeta ± {}): the record does not determine the pole",
+                self.f1_uncertainty, self.zeta_uncertainty
+            ));
+        }
+        if self.residual_ratio.is_nan() || self.residual_ratio > MAX_RESIDUAL {
+            why.push(format!(
+                "the fit leaves {:.3} of the signal RMS unexplained (at most {MAX_RESIDUAL}): no single decaying mode in the record",
+                self.residual_ratio
+            ));
+        }
+        if let Some((lo, hi)) = band {
+            if !(lo..=hi).contains(&self.f1) {
+                why.push(format!(
+                    "f1 = {:.6} Hz lies outside the band {lo} … {hi} Hz asked for",
+                    self.f1
+                ));
+            }
+        }
+        if self.zeta <= 2.0 * ZETA_BOUNDS.0 {
+            why.push(format!(
+                "zeta = {:.2e} sits on the fit's lower bound {:.0e}: the oscillation does not decay (negative damping, or a steady response)",
+                self.zeta, ZETA_BOUNDS.0
+            ));
+        } else if self.zeta >= 0.98 * ZETA_BOUNDS.1 {
+            why.push(format!(
+                "zeta = {:.3} sits on the fit's upper bound {}: no lightly damped mode",
+                self.zeta, ZETA_BOUNDS.1
+            ));
+        }
+        if self.f1_uncertainty > MAX_F1_UNCERTAINTY * self.f1 {
+            why.push(format!(
+                "f1 is uncertain by {:.1} % (at most {:.0} %)",
+                100.0 * self.f1_uncertainty / self.f1,
+                100.0 * MAX_F1_UNCERTAINTY
+            ));
+        }
+        if self.zeta_uncertainty >= self.zeta {
+            why.push(format!(
+                "zeta = {:.3} % ± {:.3} %: the record does not tell the damping from zero",
+                100.0 * self.zeta,
+                100.0 * self.zeta_uncertainty
+            ));
+        }
+        why
+    }
+
+    /// Applies [`Identified::check`]: sets the verdict and the reasons.
+    pub fn gate(mut self, band: Option<(f64, f64)>) -> Self {
+        self.reasons = self.check(band);
+        self.verdict = if self.reasons.is_empty() {
+            Verdict::Usable
+        } else {
+            Verdict::Unusable
+        };
+        self
+    }
 }
 
 /// A record: uniform time step and the chosen column.
@@ -82,22 +194,38 @@ pub struct Record {
 }
 
 /// Reads column `column` and time column `time` of a CSV (comment lines `#`, then a header row
-/// of names, then numbers). Errors name the file, line and column.
+/// of names, then numbers), line by line (the file is never held whole). Errors name the file,
+/// line and column; a record longer than [`MAX_SAMPLES`] is refused when its row is reached.
 pub fn read_csv(path: &Path, time: &str, column: &str) -> Result<Record> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read `{}`", path.display()))?;
-    parse_csv(&text, time, column).with_context(|| format!("`{}`", path.display()))
+    let file =
+        std::fs::File::open(path).with_context(|| format!("cannot read `{}`", path.display()))?;
+    let lines = std::io::BufRead::lines(std::io::BufReader::new(file));
+    parse_lines(lines, time, column).with_context(|| format!("`{}`", path.display()))
 }
 
 /// As [`read_csv`], from text.
 pub fn parse_csv(text: &str, time: &str, column: &str) -> Result<Record> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let Some((_, header)) = lines.next() else {
+    parse_lines(text.lines().map(|l| Ok(l.to_string())), time, column)
+}
+
+fn parse_lines(
+    lines: impl Iterator<Item = std::io::Result<String>>,
+    time: &str,
+    column: &str,
+) -> Result<Record> {
+    let mut lines = lines.enumerate().filter_map(|(no, l)| match l {
+        Ok(l) if l.trim().is_empty() || l.trim_start().starts_with('#') => None,
+        Ok(l) => Some(Ok((no, l))),
+        Err(e) => Some(Err(
+            anyhow::Error::new(e).context(format!("line {}: cannot read", no + 1))
+        )),
+    });
+    let Some(first) = lines.next() else {
         bail!("no header row (expected column names, e.g. `t,{column}`)");
     };
+    let (_, header) = first?;
+    // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first name.
+    let header = header.trim_start_matches('\u{feff}');
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
     let find = |name: &str, what: &str| {
         names.iter().position(|n| *n == name).ok_or_else(|| {
@@ -109,7 +237,14 @@ pub fn parse_csv(text: &str, time: &str, column: &str) -> Result<Record> {
     };
     let (it, ix) = (find(time, "--time-column")?, find(column, "--column")?);
     let (mut t, mut x) = (Vec::new(), Vec::new());
-    for (no, line) in lines {
+    for line in lines {
+        let (no, line) = line?;
+        if x.len() == MAX_SAMPLES {
+            bail!(
+                "line {}: the record is longer than {MAX_SAMPLES} samples, the most `identify` reads (it holds the record and its spectra in memory); decimate it or cut it to the decay",
+                no + 1
+            );
+        }
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let get = |i: usize, name: &str| -> Result<f64> {
             let c = cells
@@ -142,6 +277,16 @@ pub fn parse_csv(text: &str, time: &str, column: &str) -> Result<Record> {
             );
         }
     }
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(*v), b.max(*v))
+        });
+    if hi - lo <= 1e-12 * hi.abs().max(lo.abs()) {
+        bail!(
+            "invalid value for `--column`: `{column}` is constant ({lo}): no response to identify"
+        );
+    }
     Ok(Record { dt, t0: t[0], x })
 }
 
@@ -158,7 +303,8 @@ fn fft(x: &mut [Complex<f64>], inverse: bool) {
 /// Peak of the Hann-windowed amplitude spectrum (zero-padded 8×) within `band` \[Hz\].
 pub fn spectral_peak(x: &[f64], dt: f64, band: (f64, f64)) -> Result<f64> {
     let n = x.len();
-    let m = (8 * n).next_power_of_two();
+    // Zero-padded 8× for a fine grid on short records; long ones are fine enough at 2×.
+    let m = (8 * n).min((2 * n).max(1 << 21)).next_power_of_two();
     let mean = x.iter().sum::<f64>() / n as f64;
     let mut buf: Vec<Complex<f64>> = (0..m)
         .map(|k| {
@@ -336,7 +482,7 @@ pub fn fit_decay(y: &[f64], dt: f64, f0: f64, zeta0: f64) -> Result<DecayFit> {
             }
             let df = -(m22 * g1 - a12 * g2) / det;
             let dz = -(m11 * g2 - a12 * g1) / det;
-            let (fn_, zn) = (f + df, (z + dz).clamp(1e-6, 0.5));
+            let (fn_, zn) = (f + df, (z + dz).clamp(ZETA_BOUNDS.0, ZETA_BOUNDS.1));
             let (rn, _) = project(y, dt, fn_, zn);
             if sse(&rn) <= sse(&r) {
                 let small = (df / f).abs() < 1e-12 && (dz.abs() < 1e-10);
@@ -451,8 +597,19 @@ pub fn random_decrement(y: &[f64], len: usize) -> Result<(Vec<f64>, usize)> {
     Ok((sum.into_iter().map(|s| s / count as f64).collect(), count))
 }
 
-/// Identifies f₁, ζ₁ of a record (module docs). `band`: where to look for the mode \[Hz\].
+/// Identifies f₁, ζ₁ of a record (module docs), with the quality gate's verdict
+/// ([`Identified::check`]). `band`: where to look for the mode \[Hz\].
 pub fn identify(
+    rec: &Record,
+    kind: RecordKind,
+    band: Option<(f64, f64)>,
+    column: &str,
+) -> Result<Identified> {
+    let id = fit_pole(rec, kind, band, column)?;
+    Ok(id.gate(Some(band.unwrap_or((0.1, 0.25 / rec.dt)))))
+}
+
+fn fit_pole(
     rec: &Record,
     kind: RecordKind,
     band: Option<(f64, f64)>,
@@ -463,6 +620,13 @@ pub fn identify(
     let band = band.unwrap_or((0.1, 0.5 * nyquist));
     if !(band.0.is_finite() && band.1.is_finite() && 0.0 < band.0 && band.0 < band.1) {
         bail!("invalid value for `--band`: {band:?} (must be two increasing positive frequencies)");
+    }
+    if band.1 > nyquist {
+        bail!(
+            "invalid value for `--band`: {} … {} Hz reaches above the record's Nyquist frequency {nyquist} Hz",
+            band.0,
+            band.1
+        );
     }
     let fp = spectral_peak(&rec.x, dt, band)?;
     let (y, width) = band_pass(&rec.x, dt, fp);
@@ -486,6 +650,8 @@ pub fn identify(
                 window: (rec.t0 + start as f64 * dt, rec.t0 + end as f64 * dt),
                 triggers: 0,
                 residual_ratio: all.residual_ratio,
+                verdict: Verdict::Unusable,
+                reasons: Vec::new(),
             })
         }
         RecordKind::Ambient => {
@@ -536,6 +702,8 @@ pub fn identify(
                 window: (0.0, len as f64 * dt),
                 triggers,
                 residual_ratio: all.residual_ratio,
+                verdict: Verdict::Unusable,
+                reasons: Vec::new(),
             })
         }
     }

@@ -25,6 +25,7 @@ pub mod figures;
 pub mod fleet;
 pub mod identify;
 pub mod integrator;
+pub mod interrupt;
 pub mod output;
 pub mod plot;
 pub mod run;

@@ -4,6 +4,14 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // A file-size limit (`ulimit -f`) kills a process with SIGXFSZ by default, with no word;
+    // ignored, the write fails with EFBIG and the output layer names the file and keeps the
+    // previous result, as for a full disk.
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to SIG_IGN at startup, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     // Safety net: a panic would be a bug; report it on one line, without a backtrace.
     std::panic::set_hook(Box::new(|info| {
         let msg = info
@@ -18,7 +26,8 @@ fn main() -> ExitCode {
             .unwrap_or_default();
         eprintln!("error: internal error (panic{at}): {msg}");
     }));
-    let cli = host_sim::cli::Cli::parse();
+    let cli =
+        host_sim::cli::Cli::parse_from(host_sim::cli::with_negative_numbers(std::env::args_os()));
     match std::panic::catch_unwind(|| host_sim::cli::main(cli)) {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {

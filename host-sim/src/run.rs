@@ -414,6 +414,7 @@ pub fn simulate_with(
         sink(&row(sim.as_ref(), k, Some(&report)))?;
         if k % 500 == 0 {
             progress(k);
+            crate::interrupt::check()?;
         }
     }
     progress(steps);

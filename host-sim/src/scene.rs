@@ -733,12 +733,35 @@ impl Scene {
 
     /// `paper` (built in) or a path to a TOML file.
     pub fn load(spec: &str) -> Result<Self> {
+        let scene = Self::read(spec)?;
+        scene
+            .validate()
+            .with_context(|| format!("scene `{spec}`"))?;
+        Ok(scene)
+    }
+
+    /// As [`Scene::load`] without the validation (for overrides applied before it).
+    pub fn read(spec: &str) -> Result<Self> {
         if spec == "paper" {
             return Ok(Self::paper());
         }
         let path = Path::new(spec);
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("cannot read scene `{spec}`"))?;
+        let text = std::fs::read_to_string(path).with_context(|| {
+            // A bare name: the shipped scene of that name, if there is one here.
+            let shipped = Path::new("scenes").join(format!("{spec}.toml"));
+            if path.extension().is_none() && shipped.is_file() {
+                format!(
+                    "cannot read scene `{spec}` (the only built-in scene is `paper`; did you mean `{}`?)",
+                    shipped.display()
+                )
+            } else if path.extension().is_none() {
+                format!(
+                    "cannot read scene `{spec}` (the only built-in scene is `paper`; others are TOML files, e.g. `scenes/tuned.toml` in the repository)"
+                )
+            } else {
+                format!("cannot read scene `{spec}`")
+            }
+        })?;
         let file = parse(&text).with_context(|| format!("scene `{spec}`"))?;
         let base_dir = path
             .parent()
@@ -752,9 +775,6 @@ impl Scene {
                 base_dir
             },
         };
-        scene
-            .validate()
-            .with_context(|| format!("scene `{spec}`"))?;
         Ok(scene)
     }
 
@@ -818,6 +838,22 @@ impl Scene {
         }
         if let Some(arm) = &f.arm {
             arm.detail_category()?;
+            // The heads by the key users write (the core names its array, not the entry).
+            let length = f.beam.length;
+            for (i, h) in arm.heads.iter().enumerate() {
+                if !h.mass.is_finite() || h.mass < 0.0 {
+                    bail!(
+                        "invalid value for `arm.heads[{i}].mass`: {} (must be finite and not negative) [kg]",
+                        h.mass
+                    );
+                }
+                if !h.position.is_finite() || !(0.0..=length).contains(&h.position) {
+                    bail!(
+                        "invalid value for `arm.heads[{i}].position`: {} (must lie in 0 ..= {length} m, the distance from the root along the arm, `beam.length`)",
+                        h.position
+                    );
+                }
+            }
             arm.params()?
                 .validate(&p.beam)
                 .map_err(|e| map_core_error(e, self))?;

@@ -129,6 +129,11 @@ pub fn write(
     converged: usize,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<usize> {
+    if !(4..=256).contains(&converged) {
+        anyhow::bail!(
+            "invalid value for `--converged`: {converged} (must lie in 4 ..= 256: a mesh finer than the paper's 3 elements; 16 is converged to 1e-6)"
+        );
+    }
     // Both directories writable and ours before the computation (one lock if they coincide).
     let (mut doc_out, doc_name) = crate::output::OutputDir::for_file(doc, "validation")?;
     let same = std::fs::canonicalize(doc_out.dir()).ok()

@@ -552,7 +552,7 @@ heads = [{ position = 9.0, mass = 20.0 }]
         assert!(Scene::from_toml(&ok).is_ok());
         let cases = [
             (ARM.replace("wall = 0.005", "wall = 0.2"), "arm.wall"),
-            (ARM.replace("position = 9.0", "position = 11.0"), "arm.point_masses.position"),
+            (ARM.replace("position = 9.0", "position = 11.0"), "`arm.heads[0].position`: 11"),
             (format!("{ARM}detail = \"F\"\n"), "arm.detail"),
             (
                 format!("{ARM}[[loads]]\ntype = \"vortex-shedding\"\nspeed = -1.0\ndepth = 0.5\nstrouhal = 0.12\nlift_coefficient = 0.3\narea = 1.0\n"),

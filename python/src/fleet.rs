@@ -2,7 +2,7 @@
 //! path or built-in name), a seed and a duration in; numpy arrays and a summary out. The GIL is
 //! released while the record runs, so threads of one process run records in parallel too.
 
-use crate::{error, load_scene, to_py};
+use crate::{error, interruptible, load_scene, to_py};
 use host_sim::fleet::{self, Absorber};
 use host_sim::scene::Scene;
 use numpy::PyArray1;
@@ -39,9 +39,7 @@ pub fn fleet_record<'py>(
 )> {
     let s = scene_of(scene)?;
     let a = Absorber::from_name(absorber).map_err(to_py)?;
-    let r = py
-        .detach(|| fleet::record(&s, seed, duration, a, every))
-        .map_err(to_py)?;
+    let r = interruptible(py, || fleet::record(&s, seed, duration, a, every))?.map_err(to_py)?;
     let summary = serde_json::to_string(&r).map_err(|e| error(e.to_string()))?;
     let names = vec!["time", "root_stress", "tip_deflection"];
     let arrays = vec![
@@ -62,7 +60,7 @@ pub fn fleet_frequencies<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let s = scene_of(scene)?;
     let a = Absorber::from_name(absorber).map_err(to_py)?;
-    let f = py.detach(|| fleet::frequencies(&s, a)).map_err(to_py)?;
+    let f = interruptible(py, || fleet::frequencies(&s, a))?.map_err(to_py)?;
     Ok(PyArray1::from_vec(py, f))
 }
 

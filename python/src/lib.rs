@@ -46,8 +46,51 @@ fn to_py(e: anyhow::Error) -> PyErr {
     error(format!("{e:#}"))
 }
 
+/// Deepest nesting of dicts and lists in a scene dictionary: a scene nests three levels
+/// (`[[arm.heads]]`: a list of tables in a table); deeper is a mistake, and a structure that
+/// holds itself would never end.
+const MAX_SCENE_DEPTH: usize = 8;
+
+/// Runs `f` (a computation of host-sim) on a worker thread while this thread, holding the GIL
+/// between naps of 50 ms, checks Python's signals: Ctrl-C asks the computation to stop
+/// ([`host_sim::interrupt`], read every 500 steps) and raises `KeyboardInterrupt` here once it
+/// has (within a second), before any result reaches Python. The worker has the stack the
+/// command line's threads have (the full solver's frames are large); a panic in it is an
+/// `AbsorberError`, never an abort.
+fn interruptible<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
+    host_sim::interrupt::reset();
+    std::thread::scope(|scope| {
+        let worker = std::thread::Builder::new()
+            .name("absorber".into())
+            .stack_size(64 << 20)
+            .spawn_scoped(scope, f)
+            .map_err(|e| error(format!("cannot start the computation's thread: {e}")))?;
+        let mut signal = Ok(());
+        while !worker.is_finished() {
+            if signal.is_ok() {
+                signal = py.check_signals();
+                if signal.is_err() {
+                    host_sim::interrupt::raise();
+                }
+            }
+            py.detach(|| std::thread::sleep(std::time::Duration::from_millis(50)));
+        }
+        let value = py
+            .detach(|| worker.join())
+            .map_err(|_| error("internal error: the computation panicked".into()))?;
+        signal?;
+        Ok(value)
+    })
+}
+
 /// A Python value of a scene dictionary as TOML.
-fn toml_value(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+fn toml_value(v: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<toml::Value> {
+    if depth > MAX_SCENE_DEPTH {
+        return Err(error(format!(
+            "invalid value for `{}`: the scene dictionary nests deeper than {MAX_SCENE_DEPTH} levels (does it contain itself?)",
+            key.split('.').take(MAX_SCENE_DEPTH).collect::<Vec<_>>().join(".")
+        )));
+    }
     if v.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(v.extract()?));
     }
@@ -61,12 +104,12 @@ fn toml_value(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
         return Ok(toml::Value::String(v.extract()?));
     }
     if let Ok(d) = v.cast::<PyDict>() {
-        return Ok(toml::Value::Table(toml_table(d, key)?));
+        return Ok(toml::Value::Table(toml_table(d, key, depth + 1)?));
     }
     if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
         let mut a = Vec::new();
         for x in v.try_iter()? {
-            a.push(toml_value(&x?, key)?);
+            a.push(toml_value(&x?, key, depth + 1)?);
         }
         return Ok(toml::Value::Array(a));
     }
@@ -81,7 +124,7 @@ fn toml_value(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
     )))
 }
 
-fn toml_table(d: &Bound<'_, PyDict>, prefix: &str) -> PyResult<toml::Table> {
+fn toml_table(d: &Bound<'_, PyDict>, prefix: &str, depth: usize) -> PyResult<toml::Table> {
     let mut t = toml::Table::new();
     for (k, v) in d.iter() {
         let k: String = k
@@ -92,7 +135,7 @@ fn toml_table(d: &Bound<'_, PyDict>, prefix: &str) -> PyResult<toml::Table> {
         } else {
             format!("{prefix}.{k}")
         };
-        t.insert(k, toml_value(&v, &path)?);
+        t.insert(k, toml_value(&v, &path, depth)?);
     }
     Ok(t)
 }
@@ -101,7 +144,7 @@ fn toml_table(d: &Bound<'_, PyDict>, prefix: &str) -> PyResult<toml::Table> {
 /// TOML file's, unset keys at the paper's values).
 fn load_scene(scene: &Bound<'_, PyAny>) -> PyResult<Scene> {
     if let Ok(d) = scene.cast::<PyDict>() {
-        let text = toml::to_string(&toml_table(d, "")?)
+        let text = toml::to_string(&toml_table(d, "", 1)?)
             .map_err(|e| error(format!("scene dictionary: {e}")))?;
         return Scene::from_toml(&text).map_err(to_py);
     }
@@ -193,9 +236,8 @@ fn run<'py>(
 )> {
     let s = scene_with(scene, overrides)?;
     let w = warnings(&s);
-    let (rows, summary) = py
-        .detach(|| commands::run_in_memory(&s, transient, every))
-        .map_err(to_py)?;
+    let (rows, summary) =
+        interruptible(py, || commands::run_in_memory(&s, transient, every))?.map_err(to_py)?;
     let names = host_sim::run::csv_columns();
     let mut columns = vec![Vec::with_capacity(rows.len()); names.len()];
     for r in &rows {
@@ -219,7 +261,7 @@ fn static_summary(
     overrides: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
     let s = scene_with(scene, overrides)?;
-    py.detach(|| commands::static_summary(&s))
+    interruptible(py, || commands::static_summary(&s))?
         .map(|v| v.to_string())
         .map_err(to_py)
 }
@@ -234,9 +276,7 @@ fn modes<'py>(
     count: usize,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let s = scene_with(scene, overrides)?;
-    let f = py
-        .detach(|| commands::lowest_frequencies(&s, count))
-        .map_err(to_py)?;
+    let f = interruptible(py, || commands::lowest_frequencies(&s, count))?.map_err(to_py)?;
     Ok(PyArray1::from_vec(py, f))
 }
 
@@ -252,9 +292,10 @@ fn sweep(
     jobs: Option<usize>,
 ) -> PyResult<String> {
     let s = scene_with(scene, overrides)?;
-    let points = py
-        .detach(|| commands::sweep_in_memory(&s, freqs.as_deref(), last, jobs))
-        .map_err(to_py)?;
+    let points = interruptible(py, || {
+        commands::sweep_in_memory(&s, freqs.as_deref(), last, jobs)
+    })?
+    .map_err(to_py)?;
     serde_json::to_string(&points).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 

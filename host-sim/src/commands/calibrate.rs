@@ -4,7 +4,7 @@
 use super::{describe, load};
 use crate::calibrate::{fit, fit_damping, fit_f1, reference, Characteristics, DampingFit};
 use crate::cli::{CalibrateArgs, IdentifyArgs};
-use crate::identify::{identify as identify_record, read_csv, Identified};
+use crate::identify::{identify as identify_record, read_csv, Identified, Verdict};
 use crate::output::{OutputDir, Status};
 use crate::scene::{CalibrationSection, DampingSection, ExcitationType, ELEMENTS};
 use anyhow::{bail, Context, Result};
@@ -12,6 +12,14 @@ use serde_json::json;
 
 /// Largest reference mesh (the full solver's cost grows with it; 16 is converged to 1e-6).
 const MAX_REFERENCE_ELEMENTS: usize = 256;
+
+/// Largest worst relative residual of a calibration written as a scene: every model from 2
+/// elements up fits a converged reference to below 1e-3 (6.5e-4 at N = 2, 4e-7 at N = 3,
+/// docs/model.md); 1 % left means the reference or the model is not what it should be.
+const MAX_RESIDUAL: f64 = 1e-2;
+
+/// The same when the fit stopped at its iteration cap while still improving.
+const MAX_RESIDUAL_AT_CAP: f64 = 1e-3;
 
 fn row(name: &str, unit: &str, r: f64, u: f64, c: f64) -> String {
     let e = |x: f64| 100.0 * (x / r - 1.0);
@@ -57,9 +65,10 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
         bail!("invalid value for `elements`: {n} (the core is built for {ELEMENTS:?} elements)");
     }
     let m = a.reference_elements;
-    if m == 0 || m > MAX_REFERENCE_ELEMENTS {
+    if m <= n || m > MAX_REFERENCE_ELEMENTS {
         bail!(
-            "invalid value for `--reference-elements`: {m} (must lie in 1 ..= {MAX_REFERENCE_ELEMENTS})"
+            "invalid value for `--reference-elements`: {m} (must lie in {} ..= {MAX_REFERENCE_ELEMENTS}: the reference is the converged model the {n}-element model is fitted to, so it must be finer; 16 is converged to 1e-6)",
+            n + 1
         );
     }
     let targets = match &a.from_identified {
@@ -67,8 +76,22 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read `{}`", path.display()))?;
             let id: Identified = toml::from_str(&text).with_context(|| {
-                format!("`{}` is not a file written by `identify`", path.display())
+                format!(
+                    "invalid value for `--from-identified`: `{}` is not a file written by `identify`",
+                    path.display()
+                )
             })?;
+            let mut why = id.reasons.clone();
+            if why.is_empty() {
+                why = id.check(None);
+            }
+            if id.verdict == Verdict::Unusable || !why.is_empty() {
+                bail!(
+                    "invalid value for `--from-identified`: `{}` holds an unusable identification ({})",
+                    path.display(),
+                    why.join("; ")
+                );
+            }
             Some((Some(id.f1), Some(id.zeta)))
         }
         None if a.target_f1.is_some() || a.target_zeta.is_some() => {
@@ -80,6 +103,15 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
     let (mut dir, name) = OutputDir::for_file(&a.out, "calibrate")?;
     let (reference, free_index) = reference(&s, m)?;
     let fit = fit(&s, n, &reference, free_index)?;
+    if fit.worst() > MAX_RESIDUAL || (fit.capped && fit.worst() > MAX_RESIDUAL_AT_CAP) {
+        bail!(
+            "the calibration does not fit the {m}-element reference: worst relative residual {:.2e} after {} Levenberg–Marquardt iterations{} (at most {MAX_RESIDUAL:.0e}{}); no scene written. A {n}-element model fits a converged reference to below 1e-3 (docs/model.md, \"Calibration\"): check `--reference-elements` (16 is converged) and the scene's beam",
+            fit.worst(),
+            fit.iterations,
+            if fit.capped { ", the iteration cap" } else { "" },
+            if fit.capped { ", or 1e-3 at the cap" } else { "" },
+        );
+    }
     let mut params = s.params()?;
     params.calibration = fit.calibration;
     let mut pole = None;
@@ -250,9 +282,21 @@ pub fn identify(a: &IdentifyArgs) -> Result<()> {
                 String::new()
             }
         );
+        match id.verdict {
+            Verdict::Usable => println!("verdict: usable"),
+            Verdict::Unusable => println!("verdict: UNUSABLE"),
+        }
         if let Some(p) = written {
             println!("wrote {}", p.display());
         }
+    }
+    if id.verdict == Verdict::Unusable {
+        bail!(
+            "no usable pole in `{}` column `{}`: {}",
+            a.csv.display(),
+            a.column,
+            id.reasons.join("; ")
+        );
     }
     Ok(())
 }

@@ -60,7 +60,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
         curve: detail.curve(ThresholdRule::Cutoff),
         ..MonitorConfig::paper(&params)?
     };
-    let pool = pool(a.jobs)?;
+    let pool = pool(a.jobs, 2 * freqs.len() * amps.len())?;
     let dir = a
         .out
         .clone()

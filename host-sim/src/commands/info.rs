@@ -28,7 +28,7 @@ pub fn lowest_frequencies(s: &Scene, count: usize) -> Result<Vec<f64>> {
 }
 
 pub fn static_cmd(a: &InfoArgs) -> Result<()> {
-    let s = load(&a.scene)?;
+    let s = load(&a.scene.scene_args())?;
     let summary = static_summary(&s)?;
     let d = summary["static_tip_deflection"]
         .as_f64()
@@ -43,7 +43,7 @@ pub fn static_cmd(a: &InfoArgs) -> Result<()> {
 }
 
 pub fn modes(a: &ModesArgs) -> Result<()> {
-    let s = load(&a.scene)?;
+    let s = load(&a.scene.scene_args())?;
     let sim = crate::run::build_simulator(&s, 0.0)?;
     let f = lowest_frequencies(&s, a.count)?;
     let p = s.params()?;
@@ -88,7 +88,7 @@ pub fn modes(a: &ModesArgs) -> Result<()> {
 }
 
 pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
-    let s = load(&a.scene)?;
+    let s = load(&a.scene.scene_args())?;
     if !a.ratio.is_finite() || a.ratio <= 0.0 {
         bail!(
             "invalid value for `--ratio`: {} (must be finite and positive)",

@@ -108,15 +108,24 @@ fn progress_bar(total: u64, what: &str) -> ProgressBar {
 }
 
 /// Worker pool of `jobs` threads (default: all cores) with big stacks for large models.
-fn pool(jobs: Option<usize>) -> Result<rayon::ThreadPool> {
-    let mut pool = rayon::ThreadPoolBuilder::new().stack_size(64 << 20);
-    if let Some(j) = jobs {
-        if j == 0 {
-            anyhow::bail!("invalid value for `--jobs`: 0 (must be at least 1)");
-        }
-        pool = pool.num_threads(j);
+/// The worker threads of a parallel command: `--jobs` (default: every core), capped at the
+/// `tasks` there are and at the cores: a thread more than either only costs memory (each gets a
+/// 64 MiB stack; the full solver's frames are large).
+fn pool(jobs: Option<usize>, tasks: usize) -> Result<rayon::ThreadPool> {
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let wanted = match jobs {
+        Some(0) => anyhow::bail!("invalid value for `--jobs`: 0 (must be at least 1)"),
+        Some(j) => j,
+        None => cores,
+    };
+    let threads = wanted.min(cores).min(tasks.max(1));
+    if jobs.is_some_and(|j| j > threads) {
+        eprintln!("note: --jobs {wanted} runs on {threads} threads ({tasks} tasks, {cores} cores)");
     }
-    Ok(pool.build()?)
+    Ok(rayon::ThreadPoolBuilder::new()
+        .stack_size(64 << 20)
+        .num_threads(threads)
+        .build()?)
 }
 
 /// Checks excitation frequencies and amplitudes given on the command line against the step

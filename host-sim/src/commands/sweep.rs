@@ -37,7 +37,7 @@ fn check(s: &Scene, freqs: Option<&[f64]>, last: f64) -> Result<Vec<f64>> {
 }
 
 /// `sweep` in memory (the Python package's `sweep`): the same checks and the same parallel runs
-/// on `jobs` threads (default: all cores), one point per frequency (failed points carry their
+/// on `jobs` threads (default and at most: the cores and the frequencies), one point per frequency (failed points carry their
 /// error).
 pub fn sweep_in_memory(
     s: &Scene,
@@ -46,14 +46,14 @@ pub fn sweep_in_memory(
     jobs: Option<usize>,
 ) -> Result<Vec<SweepPoint>> {
     let freqs = check(s, freqs, last)?;
-    let pool = pool(jobs)?;
+    let pool = pool(jobs, freqs.len())?;
     pool.install(|| sweep(s, &freqs, last, &|_| {}))
 }
 
 pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
     let s = load(&a.scene)?;
     let freqs = check(&s, a.freqs.as_deref(), a.last)?;
-    let pool = pool(a.jobs)?;
+    let pool = pool(a.jobs, freqs.len())?;
     let dir = a
         .out
         .clone()

@@ -1301,7 +1301,7 @@ pub struct StabilityArgs {
     /// docs/stability.md: give `--out` another file.
     #[arg(long)]
     pub only: Option<String>,
-    /// Length of the drift study \[s\] (f32 beside f64 at 3.70 Hz).
+    /// Length of the drift study [s] (f32 beside f64 at 3.70 Hz).
     #[arg(long, default_value_t = 3600.0)]
     pub drift_duration: f64,
     /// Parallel cases (default: available cores, at most 2).
