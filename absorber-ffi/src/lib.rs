@@ -1338,7 +1338,7 @@ pub unsafe extern "C" fn absorber_init(
 
 impl AbsorberStatus {
     /// Every status, in the order of their values.
-    const ALL: [AbsorberStatus; 14] = [
+    const ALL: [AbsorberStatus; 15] = [
         AbsorberStatus::Ok,
         AbsorberStatus::InvalidParameter,
         AbsorberStatus::NonFiniteInput,
@@ -1353,6 +1353,7 @@ impl AbsorberStatus {
         AbsorberStatus::NotInitialized,
         AbsorberStatus::BufferTooSmall,
         AbsorberStatus::Other,
+        AbsorberStatus::WorkCap,
     ];
 
     /// The status whose value is `raw`, if there is one.
