@@ -325,8 +325,16 @@ fn binary_reports_malformed_files_on_one_line() {
         "{err}"
     );
     // Overrides on the command line.
-    one_line_failure(&["run", "--no-plots", "--step", "nan"], None, "integrator.step");
-    one_line_failure(&["run", "--no-plots", "--step=-0.001"], None, "integrator.step");
+    one_line_failure(
+        &["run", "--no-plots", "--step", "nan"],
+        None,
+        "integrator.step",
+    );
+    one_line_failure(
+        &["run", "--no-plots", "--step=-0.001"],
+        None,
+        "integrator.step",
+    );
     one_line_failure(
         &[
             "run",

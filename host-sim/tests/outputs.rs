@@ -313,15 +313,29 @@ fn meaningless_input_is_refused_naming_the_field() {
 
 #[test]
 fn a_poorly_resolved_frequency_is_warned_about() {
-    let o = run(&["static", "--frequency", "20"]);
+    let d = dir("resolution");
+    let ds = d.to_str().unwrap();
+    let args = |f: &'static str| {
+        [
+            "run",
+            "--frequency",
+            f,
+            "--duration",
+            "0.03",
+            "--no-plots",
+            "--out",
+            ds,
+        ]
+    };
+    let o = run(&args("20"));
     assert!(o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
         e.contains("warning") && e.contains("steps per period"),
         "{e}"
     );
-    let o = run(&["static", "--frequency", "4.13"]);
-    assert!(String::from_utf8_lossy(&o.stderr).is_empty());
+    let o = run(&args("4.13"));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
 }
 
 #[test]
