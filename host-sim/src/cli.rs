@@ -185,34 +185,17 @@ impl ModelArgs {
     /// The same selection as [`SceneArgs`] (no run overrides).
     pub fn scene_args(&self) -> SceneArgs {
         SceneArgs {
-            scene: self.scene.clone(),
-            solver: self.solver,
-            kind: self.kind,
-            elements: self.elements,
-            precision: self.precision,
+            model: self.clone(),
             ..SceneArgs::default()
         }
     }
 }
 
-/// Scene selection and overrides shared by all commands.
+/// Scene selection and overrides shared by all commands that run the model in time.
 #[derive(Args, Debug, Clone, Default)]
 pub struct SceneArgs {
-    /// `paper` (built in) or a scene TOML file (e.g. `scenes/mast-arm.toml`).
-    #[arg(long, short, default_value = "paper")]
-    pub scene: String,
-    /// Solver (overrides the scene).
-    #[arg(long, value_enum)]
-    pub solver: Option<Solver>,
-    /// Bodies (overrides the scene).
-    #[arg(long, value_enum)]
-    pub kind: Option<Kind>,
-    /// Beam elements: core 1, 2, 3, 4, 6, 8 or 16; full any (overrides the scene).
-    #[arg(long)]
-    pub elements: Option<usize>,
-    /// Scalar (overrides the scene).
-    #[arg(long, value_enum)]
-    pub precision: Option<Precision>,
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Harmonic excitation frequency [Hz] (overrides the scene).
     #[arg(long, allow_negative_numbers = true)]
     pub frequency: Option<f64>,
@@ -231,7 +214,7 @@ impl SceneArgs {
     /// Loads the scene and applies the overrides, then validates the result (a scene value that
     /// an override replaces is never held against it).
     pub fn load(&self) -> Result<Scene> {
-        let spec = &self.scene;
+        let spec = &self.model.scene;
         let s = self.apply(Scene::read(spec)?);
         if spec == "paper" {
             return s;
@@ -239,20 +222,20 @@ impl SceneArgs {
         s.with_context(|| format!("scene `{spec}`"))
     }
 
-    /// Applies the overrides to a loaded scene (`self.scene` is not read) and validates it
+    /// Applies the overrides to a loaded scene (`self.model.scene` is not read) and validates it
     /// (the Python package applies its keyword overrides through this).
     pub fn apply(&self, mut s: Scene) -> Result<Scene> {
         let f = &mut s.file;
-        if let Some(v) = self.solver {
+        if let Some(v) = self.model.solver {
             f.solver = v;
         }
-        if let Some(v) = self.kind {
+        if let Some(v) = self.model.kind {
             f.kind = v;
         }
-        if let Some(v) = self.elements {
+        if let Some(v) = self.model.elements {
             f.elements = v;
         }
-        if let Some(v) = self.precision {
+        if let Some(v) = self.model.precision {
             f.precision = v;
         }
         if self.frequency.is_some() || self.amplitude.is_some() {

@@ -193,10 +193,10 @@ fn scene_with(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -
         for (k, v) in o.iter() {
             let k: String = k.extract()?;
             match k.as_str() {
-                "solver" => a.solver = Some(parse_enum(&v, &k)?),
-                "kind" => a.kind = Some(parse_enum(&v, &k)?),
-                "precision" => a.precision = Some(parse_enum(&v, &k)?),
-                "elements" => a.elements = Some(number(&v, &k)?),
+                "solver" => a.model.solver = Some(parse_enum(&v, &k)?),
+                "kind" => a.model.kind = Some(parse_enum(&v, &k)?),
+                "precision" => a.model.precision = Some(parse_enum(&v, &k)?),
+                "elements" => a.model.elements = Some(number(&v, &k)?),
                 "frequency" => a.frequency = Some(number(&v, &k)?),
                 "amplitude" => a.amplitude = Some(number(&v, &k)?),
                 "duration" => a.duration = Some(number(&v, &k)?),

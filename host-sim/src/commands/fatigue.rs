@@ -16,7 +16,7 @@ const LOCKED: usize = 1;
 
 pub fn run(a: &FatigueArgs) -> Result<()> {
     let mut s = load(&a.scene)?;
-    if a.scene.duration.is_none() && a.scene.scene == "paper" {
+    if a.scene.duration.is_none() && a.scene.model.scene == "paper" {
         s.file.duration = 60.0;
     }
     let params = s.params()?;

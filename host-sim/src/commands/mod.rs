@@ -26,7 +26,10 @@ use std::path::Path;
 pub fn dispatch(cli: Cli) -> Result<()> {
     match cli.command.unwrap_or(Command::Paper(PaperArgs {
         scene: SceneArgs {
-            scene: "paper".into(),
+            model: crate::cli::ModelArgs {
+                scene: "paper".into(),
+                ..Default::default()
+            },
             ..Default::default()
         },
         json: false,
