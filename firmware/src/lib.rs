@@ -288,7 +288,8 @@ impl Config for Modified {
 
 /// The work cap `W` (units) instead of [`absorber_core::newton::work::DEADLINE`], for a scene
 /// whose hardest paper step takes `W − 2`: the beam only and the locked ball (23 units), the
-/// free ball on 6 elements (52).
+/// free ball on 6 elements (52); and for the ball held on the track, 47 (its hardest paper step
+/// converges in 41 units instead of 46, with the factors in hand: `fw-free-rolling`).
 pub struct Cap<const W: u32>;
 
 impl<const W: u32> Config for Cap<W> {
