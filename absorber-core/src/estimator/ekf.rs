@@ -6,8 +6,9 @@
 //! h²(½ − β) ā + βh² b`, `v* = v + h(1 − γ) ā + γh b`, `b = f_a q̈ + f_p ā`, zero for Newmark),
 //! the tip load `P_{n+1}` of the step and the sensor biases. Its error lives in the span of
 //! the `M` lowest modes `Φ` ([`super::basis`]): `δq* = Φ η_q`, `δv* = Φ η_v`, `δb = Φ η_b`
-//! (generalized-α only), so the filter's covariance is `X × X` with `X = 2M + 4` (Newmark) or
-//! `3M + 4` (generalized-α): the modal errors, the load and three bias slots.
+//! (generalized-α only), so the filter's covariance is `X × X` with `X = 2M + 6` (Newmark) or
+//! `3M + 6` (generalized-α): the modal errors, the load, its rate and its running mean, and
+//! three bias slots.
 //!
 //! **Sensitivity.** The step solves `r(q* + c_q x, v* + c_v x, x) = 0` for `x = q̈_{n+1}`;
 //! differentiating, `J δx = −(R_q δq* + R_v δv* + R_P δP)` with `J = R_a + c_v R_v + c_q R_q`
@@ -31,10 +32,12 @@
 //! ball's correction is dropped; at a landing or a release the ball's covariance restarts from
 //! [`EkfConfig::ball_restart_sd`] (`docs/monitoring.md`, "Events").
 //!
-//! **Load model.** The tip load is a first-order Gauss–Markov process, `P_{k+1} = φ P_k + w`,
-//! `φ = exp(−h/τ)`: its slow part, which accelerations cannot see, decays to zero instead of
-//! drifting (a random walk, φ = 1, makes it an unobservable marginally stable state, and its
-//! estimate drifts; Lourens et al. 2012, Naets et al. 2015).
+//! **Load model.** The tip load is a stationary process ([`load_model`]): first-order
+//! Gauss–Markov, `P_{k+1} = φ P_k + w`, `φ = exp(−h/τ)`, or critically damped second order:
+//! its slow part, which accelerations cannot see, decays to zero instead of drifting (a random
+//! walk, φ = 1, makes it an unobservable marginally stable state, and its estimate drifts;
+//! Lourens et al. 2012, Naets et al. 2015). A dummy measurement holds the load's running mean
+//! at zero ([`EkfConfig::load_mean_time`]).
 
 use super::basis::ModalBasis;
 use super::health::{Health, HealthConfig, Verdict};
@@ -50,8 +53,9 @@ use crate::system::Problem;
 use crate::tip::{self, Chain};
 use nalgebra::{SMatrix, SVector};
 
-/// Slots after the modal errors: the load and its rate, then one bias per sensor kind.
-pub const AUGMENTED: usize = 2 + KINDS;
+/// Slots after the modal errors: the load, its rate and its running mean, then one bias per
+/// sensor kind.
+pub const AUGMENTED: usize = 3 + KINDS;
 
 /// The filter's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,6 +68,15 @@ pub struct EkfConfig<T, const M: usize> {
     pub load_corner: T,
     /// Order of the load's model: 1 (Gauss–Markov, `τ = 1/ω_c`) or 2 (critically damped).
     pub load_order: u8,
+    /// Time constant of the load's running mean \[s\] (0: none), and the standard deviation
+    /// of the dummy measurement that it is zero \[N\]: a steady load is what accelerations
+    /// cannot see, and a filter left to estimate it learns it from couplings of the swinging
+    /// arm's own nonlinearity and drifts; with it the load's mean over the time constant stays
+    /// within its own sampling scatter (the dummy measurement of Naets, Cuadrado & Desmet
+    /// 2015, here on the load).
+    pub load_mean_time: T,
+    /// See [`EkfConfig::load_mean_time`] \[N\].
+    pub load_mean_sd: T,
     /// Root section (stress = −M c / I).
     pub section: RootSection<T>,
     /// Modal stress recovery: the root stress of mode `i` is multiplied by `stress_factors[i]`
@@ -90,6 +103,21 @@ pub struct EkfConfig<T, const M: usize> {
     /// Huber's bound: innovations beyond `gate` predicted sd correct as if they were
     /// `gate` sd (0: none).
     pub gate: T,
+    /// The reduced model's error around the ball's events, as `model_error` of every sensor
+    /// ([`super::sensors::Sensor::model_error`]): added while the model's ball is held on a
+    /// stop or flies, and for `event_window` samples after an impact, a separation, a
+    /// landing or a release (the full solver and the reduced model put them at other
+    /// instants; `docs/monitoring.md`, "Noise model").
+    pub event_error: T,
+    /// Samples after a ball event during which `event_error` applies.
+    pub event_window: u32,
+    /// Time constant of the model error measured online \[s\] (0: none): the innovations'
+    /// variance beyond the filter's own prediction, `E[ν²] − (h P hᵀ + r)`, averaged
+    /// (exponentially, bias-corrected) apart away from and near the ball's events, becomes the
+    /// model error's variance where it exceeds `model_error` and `event_error` (covariance
+    /// matching, Mehra 1972; `docs/monitoring.md`, "Noise model"). Innovations beyond the
+    /// gate enter it at the gate.
+    pub adapt_time: T,
 }
 
 /// What the filter says after a sample.
@@ -113,6 +141,8 @@ pub struct Estimate<T> {
     pub innovation_var: [T; KINDS],
     /// Per sensor: what became of its reading.
     pub used: [ReadingUse; KINDS],
+    /// Per sensor: the model error in use, relative to the RMS of its predicted value.
+    pub model_error: [T; KINDS],
     /// Sum of the NIS of the readings used, and how many.
     pub nis_sum: T,
     /// Scalar measurements used.
@@ -146,7 +176,7 @@ struct Recursion<T> {
 const NOISE: usize = 12;
 
 /// The extended Kalman filter of a model of scene `S` (`N` elements, `D` unknowns) in the
-/// error subspace of its `M` lowest modes, `X` = `2M + 4` (Newmark) or `3M + 4`
+/// error subspace of its `M` lowest modes, `X` = `2M + 6` (Newmark) or `3M + 6`
 /// (generalized-α) filter coordinates. It does not own the model: [`Ekf::update`] steps the
 /// model given to it (the one it was built for), so model and filter can live in separate
 /// caller storage, like [`crate::monitor::Monitor`].
@@ -170,6 +200,10 @@ pub struct Ekf<T: Real, S: Scene, const N: usize, const D: usize, const M: usize
     ud_d: SVector<T, X>,
     load: T,
     load_rate: T,
+    /// The load's running mean (module doc of [`EkfConfig::load_mean_time`]) and its weight
+    /// per step, `μ = h / T`.
+    load_mean: T,
+    mean_weight: T,
     /// The load model's transition over a step, `(P, Ṗ) ← A (P, Ṗ)`.
     load_map: [[T; 2]; 2],
     /// Its process noise as two columns `L` with `Q = L Lᵀ` (physical units).
@@ -177,6 +211,11 @@ pub struct Ekf<T: Real, S: Scene, const N: usize, const D: usize, const M: usize
     bias: [T; KINDS],
     /// Running mean square of each predicted dynamic measurement.
     rms2: [T; KINDS],
+    /// Per sensor, away from and near events: the model error's variance measured online
+    /// (exponential mean of the excess) and the mean's accumulated weight (its bias
+    /// correction).
+    adapt: [[(T, T); 2]; KINDS],
+    adapt_weight: T,
     rms_weight: T,
     /// Modal stress recovery: `σ += w_q·(q − q_eq) + w_v·v + w_a·q̈`.
     recover: [SVector<T, D>; 3],
@@ -185,6 +224,8 @@ pub struct Ekf<T: Real, S: Scene, const N: usize, const D: usize, const M: usize
     samples: u64,
     /// The model's contact after the previous sample (a release from a stop is an event).
     last_contact: Contact,
+    /// Samples since the last ball event (saturating).
+    since_event: u32,
     health: Health<T>,
     /// The modes completed consistently at the current state (`Π B = I`): the stiff
     /// (axial, high) coordinates that follow a modal displacement quasi-statically there.
@@ -210,7 +251,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         assert!(M >= 1 && M + 6 <= NOISE, "1 to 6 modes");
         assert!(
             X == 2 * M + AUGMENTED || X == 3 * M + AUGMENTED,
-            "X must be 2M + 5 (Newmark) or 3M + 5 (generalized-α)"
+            "X must be 2M + 6 (Newmark) or 3M + 6 (generalized-α)"
         );
     };
 
@@ -221,7 +262,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
 
     /// The filter for `model` (at its start state: the static equilibrium, at rest) with
     /// `config`. The scene must hold loads ([`crate::scene::Loaded`], [`crate::scene::Arm`]);
-    /// `X` must match the model's integrator (`3M + 4` for generalized-α).
+    /// `X` must match the model's integrator (`3M + 6` for generalized-α).
     pub fn new(model: &Model<T, S, N, D>, config: EkfConfig<T, M>) -> Result<Self, Error> {
         #[allow(clippy::let_unit_value)]
         let () = Self::CHECK;
@@ -248,6 +289,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             || !config.ball_restart_sd.iter().all(finite_nonneg)
             || !positive(config.rms_time)
             || !finite_nonneg(&config.gate)
+            || !finite_nonneg(&config.event_error)
+            || !finite_nonneg(&config.adapt_time)
+            || !finite_nonneg(&config.load_mean_time)
+            || !finite_nonneg(&config.load_mean_sd)
         {
             return Err(Error::InvalidParameter {
                 field: "estimator",
@@ -272,7 +317,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         if X != blocks * M + AUGMENTED {
             return Err(Error::InvalidParameter {
                 field: "estimator.X",
-                reason: "X must be 2M + 5 for Newmark, 3M + 5 for generalized-α",
+                reason: "X must be 2M + 6 for Newmark, 3M + 6 for generalized-α",
             });
         }
         let half = lit::<T>(0.5);
@@ -294,7 +339,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             blocks,
         };
         let basis = ModalBasis::of(model)?;
-        let (ld, off) = (blocks * M, blocks * M + 2);
+        let (ld, off) = (blocks * M, blocks * M + 3);
         let mut scale = SVector::<T, X>::from_element(T::one());
         for (k, w) in basis.omega.iter().enumerate() {
             scale[k] = T::one() / (*w * *w);
@@ -314,6 +359,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         if config.load_order >= 2 {
             ud_d[ld + 1] = config.load_sd * config.load_sd;
         }
+        ud_d[ld + 2] = config.load_mean_sd * config.load_mean_sd;
         for (k, s) in config.sensors.slots.iter().enumerate() {
             if let Some(s) = s {
                 ud_d[off + k] = s.bias_sd * s.bias_sd;
@@ -330,16 +376,29 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             ud_d,
             load: T::zero(),
             load_rate: T::zero(),
+            load_mean: T::zero(),
+            mean_weight: if is_positive(config.load_mean_time) {
+                (h / config.load_mean_time).min(T::one())
+            } else {
+                T::zero()
+            },
             load_map,
             load_noise,
             bias: [T::zero(); KINDS],
             rms2: [T::zero(); KINDS],
             rms_weight: (h / config.rms_time).min(T::one()),
+            adapt: [[(T::zero(), T::zero()); 2]; KINDS],
+            adapt_weight: if is_positive(config.adapt_time) {
+                (h / config.adapt_time).min(T::one())
+            } else {
+                T::zero()
+            },
             recover: [SVector::zeros(); 3],
             static_stress: T::zero(),
             modulus: p.beam.modulus,
             samples: 0,
             last_contact: Contact::Off,
+            since_event: u32::MAX,
             health: Health::new(config.health),
             dx: SMatrix::zeros(),
             xi: SMatrix::zeros(),
@@ -525,7 +584,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         readings: &Readings<T>,
         report: StepReport<T>,
     ) -> Result<Estimate<T>, Error> {
-        let (ld, off) = (self.rec.blocks * M, self.rec.blocks * M + 2);
+        let (ld, off) = (self.rec.blocks * M, self.rec.blocks * M + 3);
         self.directions(model)?;
         let contact = model.state().contact;
         // The ball's relative angle is in the filter's subspace only while it rolls off the
@@ -537,6 +596,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             || report.landing.is_some()
             || report.separation.is_some()
             || released;
+        let since_event = if ball_event {
+            0
+        } else {
+            self.since_event.saturating_add(1)
+        };
+        let near_event = matches!(S::BALL, BallKind::Free)
+            && (!ball_free || since_event < self.config.event_window);
         let rows = self.measurement_rows(model);
         // The measurement updates, on copies of the factors (committed at the end).
         let (mut u, mut d) = (self.ud_u, self.ud_d);
@@ -549,6 +615,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         let (mut nis_sum, mut nis_count) = (T::zero(), 0u32);
         let k_sample = self.samples.saturating_add(1);
         let mut rms2 = self.rms2;
+        let mut adapt = self.adapt;
+        let slot = usize::from(near_event);
+        let mut model_error_ratio = [T::zero(); KINDS];
         for kind in SensorKind::ALL {
             let k = kind.index();
             let Some(sensor) = self.config.sensors.get(kind).copied() else {
@@ -596,36 +665,87 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             // Linearized: the predicted reading moves with the corrections made so far.
             let innovation = y - predicted - bias - row.dot(&delta);
             let scale2 = rms2.get(k).copied().unwrap_or(T::zero());
-            let r = sensor.noise * sensor.noise + sensor.model_error * sensor.model_error * scale2;
+            let mut floor2 = sensor.model_error * sensor.model_error;
+            if near_event {
+                floor2 += self.config.event_error * self.config.event_error;
+            }
+            let (mean, weight) = adapt
+                .get(k)
+                .and_then(|a| a.get(slot))
+                .copied()
+                .unwrap_or((T::zero(), T::zero()));
+            let measured = if is_positive(weight) {
+                mean / weight
+            } else {
+                T::zero()
+            };
+            let model2 = (floor2 * scale2).max(measured);
+            if let Some(x) = model_error_ratio.get_mut(k) {
+                *x = if is_positive(scale2) {
+                    (model2 / scale2).sqrt()
+                } else {
+                    T::zero()
+                };
+            }
+            let noise2 = sensor.noise * sensor.noise;
+            let r = noise2 + model2;
             // Huber's bound on the correction (a robust Kalman update, Masreliez & Martin
             // 1977): an innovation beyond `gate` of its predicted sd — an event the model put
             // elsewhere in time (a landing, an impact), not Gaussian noise — is used with the
             // noise variance that brings it to `gate` sd exactly.
-            let s0 = quadratic(&u, &d, row) + r;
+            let hph = quadratic(&u, &d, row);
+            let s0 = hph + r;
             let nis = innovation * innovation / s0;
             let gate = self.config.gate;
+            if is_positive(self.adapt_weight) {
+                // The excess of this innovation over the prediction without model error,
+                // winsorized at the gate.
+                let mut nu2 = innovation * innovation;
+                if is_positive(gate) && nu2 > gate * gate * s0 {
+                    nu2 = gate * gate * s0;
+                }
+                let w = self.adapt_weight;
+                if let Some(a) = adapt.get_mut(k).and_then(|a| a.get_mut(slot)) {
+                    a.0 += w * (nu2 - hph - noise2 - a.0);
+                    a.1 += w * (T::one() - a.1);
+                }
+            }
             let mut r_used = r;
             *use_k = ReadingUse::Used;
             if is_positive(gate) && nis > gate * gate {
                 r_used = innovation * innovation / (gate * gate) - (s0 - r);
                 *use_k = ReadingUse::Capped;
             }
-            let (gain, s) = bierman(&mut u, &mut d, row, r_used).ok_or(Error::NonFiniteState)?;
-            let _ = s;
+            let (gain, _) = bierman(&mut u, &mut d, row, r_used).ok_or(Error::NonFiniteState)?;
             delta += gain * innovation;
             nis_sum += nis;
             nis_count += 1;
-            let s = s0;
             if let (Some(iv), Some(vv)) = (est_innov.get_mut(k), est_var.get_mut(k)) {
                 *iv = innovation;
-                *vv = s;
+                *vv = s0;
             }
+        }
+        // The dummy measurement that the load's running mean is zero.
+        let mean_sd = self.config.load_mean_sd;
+        if is_positive(self.mean_weight) && is_positive(mean_sd) {
+            let mut row = SVector::<T, X>::zeros();
+            row[ld + 2] = T::one();
+            let mean_prior = (T::one() - self.mean_weight) * self.load_mean
+                + self.mean_weight
+                    * (self.load_map[0][0] * self.load + self.load_map[0][1] * self.load_rate);
+            let innovation = -mean_prior - row.dot(&delta);
+            let (gain, _) =
+                bierman(&mut u, &mut d, &row, mean_sd * mean_sd).ok_or(Error::NonFiniteState)?;
+            delta += gain * innovation;
         }
         // The correction in physical coordinates, onto the model's state at n + 1.
         let physical = delta.component_mul(&self.scale);
         let [[a11, a12], [a21, a22]] = self.load_map;
         let load = a11 * self.load + a12 * self.load_rate + physical[ld];
         let load_rate = a21 * self.load + a22 * self.load_rate + physical[ld + 1];
+        let load_mean = (T::one() - self.mean_weight) * self.load_mean
+            + self.mean_weight * (a11 * self.load + a12 * self.load_rate)
+            + physical[ld + 2];
         if !load.is_finite() || !load_rate.is_finite() || load.abs() > lit(MAX_LOAD) {
             return Err(Error::NonFiniteState);
         }
@@ -634,12 +754,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         self.ud_u = u;
         self.ud_d = d;
         self.rms2 = rms2;
+        self.adapt = adapt;
         self.load = load;
         self.load_rate = load_rate;
+        self.load_mean = load_mean;
         for (k, b) in self.bias.iter_mut().enumerate() {
             *b += physical[off + k];
         }
         self.last_contact = contact;
+        self.since_event = since_event;
         // The stress's variance: its row over the posterior at n (the state at n + 1 is a
         // linear function of it).
         let mut row = rows
@@ -673,6 +796,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             innovation: est_innov,
             innovation_var: est_var,
             used,
+            model_error: model_error_ratio,
             nis_sum,
             nis_count,
             verdict,
@@ -772,7 +896,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     /// bias, is the stress row).
     fn measurement_rows(&self, model: &Model<T, S, N, D>) -> [SVector<T, X>; KINDS] {
         let rec = self.rec;
-        let (ld, off) = (rec.blocks * M, rec.blocks * M + 2);
+        let (ld, off) = (rec.blocks * M, rec.blocks * M + 3);
         let mut rows = [SVector::<T, X>::zeros(); KINDS];
         let s = model.state();
         // Filter coordinate c → (direction, mode whose shape is in δq* (c < M) or δv*).
@@ -948,7 +1072,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         report: &StepReport<T>,
     ) {
         let rec = self.rec;
-        let (ld, off) = (rec.blocks * M, rec.blocks * M + 2);
+        let (ld, off) = (rec.blocks * M, rec.blocks * M + 3);
         // F in physical coordinates, then scaled: F̃ = T⁻¹ F T.
         let mut f = SMatrix::<T, X, X>::zeros();
         for c in 0..=2 * M {
@@ -977,6 +1101,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 f[(ld + i, ld + j)] = *a;
             }
         }
+        let mu = self.mean_weight;
+        f[(ld + 2, ld)] = mu * self.load_map[0][0];
+        f[(ld + 2, ld + 1)] = mu * self.load_map[0][1];
+        f[(ld + 2, ld + 2)] = T::one() - mu;
         for k in 0..KINDS {
             f[(off + k, off + k)] = T::one();
         }
@@ -1005,6 +1133,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             let mut col = SVector::<T, X>::zeros();
             col[ld] = self.load_noise[0][c];
             col[ld + 1] = self.load_noise[1][c] / self.scale[ld + 1];
+            col[ld + 2] = mu * self.load_noise[0][c];
             push(col, T::one(), &mut self.w2);
         }
         let half = lit::<T>(0.5);
@@ -1244,6 +1373,8 @@ mod tests {
             load_sd: 0.01,
             load_corner: 2.0 * core::f64::consts::PI * 4.1,
             load_order: 1,
+            load_mean_time: 0.0,
+            load_mean_sd: 0.0,
             section: RootSection::rectangle(&Params::<f64>::default().beam).expect("section"),
             stress_factors: [1.0; M],
             initial_accel: 0.1,
@@ -1253,6 +1384,9 @@ mod tests {
             rms_time: 1.0,
             health: HealthConfig::new(300),
             gate: 3.0,
+            event_error: 0.0,
+            event_window: 30,
+            adapt_time: 0.0,
         }
     }
 
@@ -1293,7 +1427,7 @@ mod tests {
             m.step_with_loads(0.0, &Loads::uniform(f, 0.0))
                 .expect("step");
         }
-        let mut ekf = Ekf::<f64, Sc, 3, 12, 3, 11>::new(&m, config(accelerometer())).expect("ekf");
+        let mut ekf = Ekf::<f64, Sc, 3, 12, 3, 12>::new(&m, config(accelerometer())).expect("ekf");
         let start = *m.state();
         let load = 0.02;
         let step_from = |s: &crate::State<f64, 12>, load: f64| {
