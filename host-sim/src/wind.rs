@@ -546,6 +546,46 @@ mod tests {
         assert!(mean.abs() < 0.05, "mean {mean}");
     }
 
+    /// von Kármán's vertical spectrum is normalized (∫ S dn = σ², here over 1e-6 … 1e4 Hz of
+    /// the `L/U = 0.3 s` of the von Kármán scene: the tails beyond hold < 0.5 %), falls as
+    /// f^(−5/3) in the inertial subrange, and the synthesized gust has the scene's σ_w.
+    #[test]
+    fn buffeting_gust_has_the_von_karman_spectrum_and_variance() {
+        let (l, u) = (3.0, 10.0);
+        let (lo, hi, n) = (1e-6f64, 1e4f64, 200_000);
+        let r = (hi / lo).ln() / n as f64;
+        let integral: f64 = (0..n)
+            .map(|k| {
+                let f = lo * ((k as f64 + 0.5) * r).exp();
+                von_karman_vertical(f, l, u) * f * r
+            })
+            .sum();
+        assert!((integral - 1.0).abs() < 0.005, "∫ S dn / σ² = {integral}");
+        // n S(n) ∝ n^(−2/3) far above U/L.
+        let slope = (von_karman_vertical(200.0, l, u) * 200.0
+            / (von_karman_vertical(100.0, l, u) * 100.0))
+            .log2();
+        assert!((slope + 2.0 / 3.0).abs() < 0.01, "slope {slope}");
+        let c = LoadComponent::Buffeting {
+            mean_speed: 10.0,
+            turbulence_intensity: 0.2,
+            height: 7.0,
+            drag_coefficient: 1.0,
+            head_force_area: 1.0,
+            seed: 7,
+            spectrum: Spectrum::VonKarman,
+            length_scale: None,
+        };
+        let m = LoadModel::new(&[c], taper(), Path::new(".")).expect("valid");
+        let head = 0.5 * AIR_DENSITY * 10.0;
+        let xs: Vec<f64> = (0..72_000)
+            .map(|k| m.sample(k as f64 * 0.1, 2).0 / head)
+            .collect();
+        let mean = xs.iter().sum::<f64>() / xs.len() as f64;
+        let sd = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / xs.len() as f64).sqrt();
+        assert!((sd - 1.0).abs() < 0.05, "σ_w {sd} vs 1.0");
+    }
+
     /// Vortex shedding: amplitude ½ρU²AC_L and frequency St U / D, on only in its episodes.
     #[test]
     fn vortex_shedding_force_has_the_closed_form_amplitude_and_frequency() {
