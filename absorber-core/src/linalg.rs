@@ -129,6 +129,25 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
         m
     }
 
+    /// `y = J x` (the unfactored matrix; the estimator's products with `∂r/∂q` and `∂r/∂v`).
+    pub fn mul_vec(&self, x: &SVector<T, D>, y: &mut SVector<T, D>) {
+        let xs = x.as_slice();
+        for (i, (row, yi)) in self.rows.iter().zip(y.iter_mut()).enumerate() {
+            // Row i holds columns i − BAND ..= i + BAND.
+            let (lo, skip) = match i.checked_sub(BAND) {
+                Some(lo) => (lo, 0),
+                None => (0, BAND - i),
+            };
+            let mut sum = T::zero();
+            if let (Some(r), Some(xw)) = (row.get(skip..), xs.get(lo..)) {
+                for (a, b) in r.iter().zip(xw.iter()) {
+                    sum += *a * *b;
+                }
+            }
+            *yi = sum;
+        }
+    }
+
     /// Writes the same matrix, dense, into `m` (every entry; the pivoting fallback, in place:
     /// no `D×D` matrix on the stack).
     pub fn write_dense(&self, m: &mut SMatrix<T, D, D>) {

@@ -92,12 +92,14 @@ pub enum Command {
     /// Writes docs/validation.md: every quantitative claim of the paper beside this model's
     /// numbers (3 elements and a converged mesh), with verdicts, reasons and figures.
     Validation(ValidationArgs),
-    /// Twin experiment of the root-stress estimator on a real arm: truth = full solver (16
-    /// elements, f64) under the scene's `[[loads]]`; measurement = its tip acceleration with
-    /// the `[sensor]`'s noise and bias; estimate = the core (3 elements, f32, calibrated) fed
-    /// only that. Prints the stress RMS error, the Miner damage ratio and the stress-range
-    /// histograms; with `--out`, writes `estimate.csv`, `estimate_stress.png`,
-    /// `estimate_histogram.png` and `estimate.json`.
+    /// The monitor's estimators against the full solver (16 elements, f64): on a real arm
+    /// under the scene's `[[loads]]`, or (`--lab`) on the paper's arm with its free ball under
+    /// a wind-like tip force; read by the scene's `[[sensors]]`; the extended Kalman filter
+    /// (core, 3 elements, f32, calibrated) with each sensor set, and the constant-gain
+    /// baseline. Prints per estimator the stress RMS error, the Miner damage ratio, the mean
+    /// NIS and the health verdict; `--json` for the same as JSON; `--out` for CSV, JSON and
+    /// plots; `--table` for the regimes × sensor sets × estimators table of
+    /// docs/monitoring.md.
     Estimate(EstimateArgs),
     /// Packages the reduced model of a scene as an FMI 3.0 or 2.0 co-simulation FMU (inputs:
     /// base acceleration, tip load; outputs: tip deflection and acceleration, root stress,
@@ -108,34 +110,38 @@ pub enum Command {
 /// `estimate`.
 #[derive(Args, Debug)]
 pub struct EstimateArgs {
-    /// Scene TOML file with `[arm]`, `[sensor]` and `[[loads]]` (e.g. scenes/mast-arm.toml);
-    /// with `--lab`, a free-ball scene (`paper`, built in).
-    #[arg(long, short)]
+    /// Scene TOML file with `[arm]`, `[[sensors]]` and `[[loads]]` (e.g.
+    /// scenes/mast-arm.toml); with `--lab`, a free-ball scene (`paper`, built in; its
+    /// `[[sensors]]`, or a tip accelerometer, a ball-angle encoder and a root strain gauge).
+    #[arg(long, short, default_value = "paper")]
     pub scene: String,
     /// Simulated time [s] (default: the scene's).
     #[arg(long, allow_negative_numbers = true)]
     pub duration: Option<f64>,
-    /// Standard deviation of the estimator's tip-load random walk per sample [N] (default:
-    /// 0.5; with `--lab`, the tip force's largest change per sample, 2π f A h).
+    /// Standard deviation of the constant-gain baseline's tip-load random walk per sample [N]
+    /// (default: 0.5; with `--lab`, the tip force's largest change per sample, 2π f A h).
     #[arg(long, allow_negative_numbers = true)]
     pub load_step: Option<f64>,
-    /// Time constant of the estimator's tip-load model (Gauss–Markov) [s].
+    /// Time constant of the constant-gain baseline's tip-load model (Gauss–Markov) [s].
     #[arg(long, default_value_t = 5.0, allow_negative_numbers = true)]
     pub load_time: f64,
     /// Directory for the CSV, plots and JSON.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Write the estimator as firmware constants to this Rust file and stop
-    /// (firmware/src/estimator_gain.rs).
+    /// Write the firmware's estimators as constants to this Rust file and stop
+    /// (firmware/src/estimator_consts.rs: the `--scene` arm's and the paper's lab arm's).
     #[arg(long)]
     pub emit_firmware: Option<PathBuf>,
+    /// Run every regime of docs/monitoring.md's table (lab at 3.70, 4.05, 4.10, 4.13 Hz; the
+    /// mast arm's scenes in scenes/) and write the table (markdown) to this file and its JSON
+    /// beside it.
+    #[arg(long)]
+    pub table: Option<PathBuf>,
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,
     /// The lab study instead of the twin: the scene's free ball (e.g. `paper`) under a
-    /// wind-like tip force, truth against the same arm with the ball locked (what a monitor
-    /// model without the ball's motion predicts), and the estimator with the ball left out
-    /// and with the ball in its state.
+    /// wind-like tip force; truth with the ball free and with it locked.
     #[arg(long)]
     pub lab: bool,
     /// `--lab`: amplitude of the tip force [N] (at the scene's excitation frequency).

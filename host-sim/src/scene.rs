@@ -413,9 +413,267 @@ pub struct SceneFile {
     /// Loads on the arm (`[[loads]]`, summed; see [`crate::wind`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub loads: Vec<crate::wind::LoadComponent>,
-    /// The tip accelerometer of a monitor (`host-sim estimate`).
+    /// The tip accelerometer of a monitor (`host-sim estimate`): the older single-sensor
+    /// form, read as one `[[sensors]]` entry of type `tip_accel`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor: Option<SensorSection>,
+    /// The monitor's sensors (`[[sensors]]`, any subset of `tip_accel`, `ball_angle`,
+    /// `root_strain`; `host-sim estimate`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sensors: Vec<SensorSpec>,
+}
+
+/// One `[[sensors]]` entry: a sensor of the monitor, in its data sheet's units. The noise is
+/// white with the standard deviation of one sample; the bias is a constant offset the
+/// estimator does not know beyond its installation's zero calibration; a reading at or
+/// beyond the range reads the rail (clipped).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SensorSpec {
+    /// MEMS accelerometer at the tip, vertical axis.
+    TipAccel {
+        /// Noise density \[µg/√Hz\].
+        noise_density_ug: f64,
+        /// Bandwidth of its filter \[Hz\] (the noise is white up to it).
+        bandwidth: f64,
+        /// Constant bias \[mg\].
+        #[serde(default)]
+        bias_mg: f64,
+        /// Full-scale range ± \[g\].
+        range_g: f64,
+        /// Output data rate \[Hz\] (a divisor of the model's step rate).
+        rate: f64,
+        /// Seed of the noise.
+        #[serde(default)]
+        seed: u64,
+    },
+    /// Ball angle relative to the housing: a magnetic angle encoder in the housing's wall.
+    BallAngle {
+        /// Noise, standard deviation of one sample \[°\].
+        noise_deg: f64,
+        /// Resolution (quantization step) \[°\] (0: none).
+        #[serde(default)]
+        resolution_deg: f64,
+        /// Constant offset \[°\].
+        #[serde(default)]
+        bias_deg: f64,
+        /// Range ± \[°\].
+        #[serde(default = "half_turn")]
+        range_deg: f64,
+        /// Output data rate \[Hz\].
+        rate: f64,
+        /// Seed of the noise.
+        #[serde(default)]
+        seed: u64,
+    },
+    /// Foil strain gauge at the clamp, top fibre, along the arm.
+    RootStrain {
+        /// Noise, standard deviation of one sample \[µε\].
+        noise_ue: f64,
+        /// Constant offset \[µε\] (zero drift after installation).
+        #[serde(default)]
+        bias_ue: f64,
+        /// Range ± \[µε\] (the bridge amplifier's full scale).
+        range_ue: f64,
+        /// Output data rate \[Hz\].
+        rate: f64,
+        /// Seed of the noise.
+        #[serde(default)]
+        seed: u64,
+    },
+}
+
+fn half_turn() -> f64 {
+    180.0
+}
+
+impl SensorSpec {
+    /// The kind.
+    pub fn kind(&self) -> absorber_core::estimator::SensorKind {
+        use absorber_core::estimator::SensorKind;
+        match self {
+            SensorSpec::TipAccel { .. } => SensorKind::TipAccel,
+            SensorSpec::BallAngle { .. } => SensorKind::BallAngle,
+            SensorSpec::RootStrain { .. } => SensorKind::RootStrain,
+        }
+    }
+
+    /// Standard deviation of one sample's noise, with the quantization's `step/√12` \[SI\].
+    pub fn noise_sd(&self) -> f64 {
+        match *self {
+            SensorSpec::TipAccel {
+                noise_density_ug,
+                bandwidth,
+                ..
+            } => noise_density_ug * 1e-6 * G0 * bandwidth.sqrt(),
+            SensorSpec::BallAngle {
+                noise_deg,
+                resolution_deg,
+                ..
+            } => (noise_deg.powi(2) + resolution_deg.powi(2) / 12.0)
+                .sqrt()
+                .to_radians(),
+            SensorSpec::RootStrain { noise_ue, .. } => noise_ue * 1e-6,
+        }
+    }
+
+    /// The bias \[SI\].
+    pub fn bias(&self) -> f64 {
+        match *self {
+            SensorSpec::TipAccel { bias_mg, .. } => bias_mg * 1e-3 * G0,
+            SensorSpec::BallAngle { bias_deg, .. } => bias_deg.to_radians(),
+            SensorSpec::RootStrain { bias_ue, .. } => bias_ue * 1e-6,
+        }
+    }
+
+    /// The range ± \[SI\].
+    pub fn range(&self) -> f64 {
+        match *self {
+            SensorSpec::TipAccel { range_g, .. } => range_g * G0,
+            SensorSpec::BallAngle { range_deg, .. } => range_deg.to_radians(),
+            SensorSpec::RootStrain { range_ue, .. } => range_ue * 1e-6,
+        }
+    }
+
+    /// The output data rate \[Hz\].
+    pub fn rate(&self) -> f64 {
+        match *self {
+            SensorSpec::TipAccel { rate, .. }
+            | SensorSpec::BallAngle { rate, .. }
+            | SensorSpec::RootStrain { rate, .. } => rate,
+        }
+    }
+
+    /// The seed of its noise.
+    pub fn seed(&self) -> u64 {
+        match *self {
+            SensorSpec::TipAccel { seed, .. }
+            | SensorSpec::BallAngle { seed, .. }
+            | SensorSpec::RootStrain { seed, .. } => seed,
+        }
+    }
+
+    /// Quantization step \[SI\] (0: none).
+    pub fn resolution(&self) -> f64 {
+        match *self {
+            SensorSpec::BallAngle { resolution_deg, .. } => resolution_deg.to_radians(),
+            _ => 0.0,
+        }
+    }
+
+    /// Model steps between readings at step `h`: `1 / (rate h)`, which must be a whole
+    /// number (errors name the key).
+    pub fn every(&self, h: f64, index: usize) -> Result<u32> {
+        let every = 1.0 / (self.rate() * h);
+        let n = every.round();
+        if n < 1.0 || (every / n - 1.0).abs() > 1e-6 {
+            bail!(
+                "invalid value for `sensors[{index}].rate`: {} Hz (the model's step rate, {} Hz, must be a whole multiple of it)",
+                self.rate(),
+                1.0 / h
+            );
+        }
+        Ok(n as u32)
+    }
+
+    /// One reading of the true value `x` \[SI\]: plus the bias and the noise (from `rng`),
+    /// quantized, and at the rail when at or beyond the range.
+    pub fn read(&self, x: f64, rng: &mut crate::wind::Rng) -> f64 {
+        let range = self.range();
+        let mut y = x + self.bias() + self.noise_sd_raw() * rng.normal();
+        let q = self.resolution();
+        if q > 0.0 {
+            y = (y / q).round() * q;
+        }
+        y.clamp(-range, range)
+    }
+
+    /// The noise without the quantization's part (the quantization is applied as such).
+    fn noise_sd_raw(&self) -> f64 {
+        match *self {
+            SensorSpec::BallAngle { noise_deg, .. } => noise_deg.to_radians(),
+            _ => self.noise_sd(),
+        }
+    }
+
+    /// Checks the values (errors name the key `sensors[index].…`).
+    pub fn validate(&self, index: usize) -> Result<()> {
+        let key = |k: &str| format!("sensors[{index}].{k}");
+        let pos = |x: f64, k: &str| finite_positive(x, &key(k));
+        let finite = |x: f64, k: &str| -> Result<()> {
+            if !x.is_finite() {
+                bail!("invalid value for `{}`: must be finite", key(k));
+            }
+            Ok(())
+        };
+        match *self {
+            SensorSpec::TipAccel {
+                noise_density_ug,
+                bandwidth,
+                bias_mg,
+                range_g,
+                rate,
+                ..
+            } => {
+                pos(noise_density_ug, "noise_density_ug")?;
+                pos(bandwidth, "bandwidth")?;
+                finite(bias_mg, "bias_mg")?;
+                pos(range_g, "range_g")?;
+                pos(rate, "rate")?;
+                if bandwidth > 0.5 * rate {
+                    bail!(
+                        "invalid value for `{}`: {bandwidth} Hz (at most half of `rate`)",
+                        key("bandwidth")
+                    );
+                }
+            }
+            SensorSpec::BallAngle {
+                noise_deg,
+                resolution_deg,
+                bias_deg,
+                range_deg,
+                rate,
+                ..
+            } => {
+                pos(noise_deg, "noise_deg")?;
+                if !resolution_deg.is_finite() || resolution_deg < 0.0 {
+                    bail!(
+                        "invalid value for `{}`: must be finite and not negative",
+                        key("resolution_deg")
+                    );
+                }
+                finite(bias_deg, "bias_deg")?;
+                pos(range_deg, "range_deg")?;
+                pos(rate, "rate")?;
+            }
+            SensorSpec::RootStrain {
+                noise_ue,
+                bias_ue,
+                range_ue,
+                rate,
+                ..
+            } => {
+                pos(noise_ue, "noise_ue")?;
+                finite(bias_ue, "bias_ue")?;
+                pos(range_ue, "range_ue")?;
+                pos(rate, "rate")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl From<SensorSection> for SensorSpec {
+    fn from(s: SensorSection) -> Self {
+        SensorSpec::TipAccel {
+            noise_density_ug: s.noise_density_ug,
+            bandwidth: s.bandwidth,
+            bias_mg: s.bias_mg,
+            range_g: s.range_g,
+            rate: s.rate,
+            seed: s.seed,
+        }
+    }
 }
 
 /// `[arm]`: a tapered circular tube with signal heads ([`absorber_core::ArmParams`]).
@@ -522,6 +780,17 @@ impl ArmSection {
 
 /// Standard gravity \[m/s²\]: the g of the sensor's units.
 pub const G0: f64 = 9.80665;
+
+impl SceneFile {
+    /// The monitor's sensors: `[[sensors]]`, or the older `[sensor]` as one `tip_accel`.
+    pub fn sensor_specs(&self) -> Vec<SensorSpec> {
+        if !self.sensors.is_empty() {
+            self.sensors.clone()
+        } else {
+            self.sensor.map(SensorSpec::from).into_iter().collect()
+        }
+    }
+}
 
 impl SensorSection {
     /// White-noise standard deviation of a reading, noise density · √bandwidth \[m/s²\].
@@ -702,6 +971,7 @@ impl Default for SceneFile {
             arm: None,
             loads: Vec::new(),
             sensor: None,
+            sensors: Vec::new(),
         }
     }
 }
@@ -869,6 +1139,23 @@ impl Scene {
         }
         if let Some(sensor) = &f.sensor {
             sensor.validate()?;
+        }
+        if f.sensor.is_some() && !f.sensors.is_empty() {
+            bail!("give the monitor's sensors as `[[sensors]]` only (the single `[sensor]` is the older form of one `tip_accel`)");
+        }
+        let mut seen = Vec::new();
+        for (i, s) in f.sensors.iter().enumerate() {
+            s.validate(i)?;
+            if seen.contains(&s.kind()) {
+                bail!(
+                    "invalid value for `sensors[{i}].type`: a second `{}` (one sensor of each type)",
+                    s.kind().id()
+                );
+            }
+            if s.kind() == absorber_core::estimator::SensorKind::BallAngle && f.kind != Kind::Free {
+                bail!("invalid value for `sensors[{i}].type`: `ball_angle` needs `kind = \"free\"` (a ball to measure)");
+            }
+            seen.push(s.kind());
         }
         let o = &f.outputs;
         if !o.transient.is_finite() || o.transient < 0.0 {
@@ -1078,7 +1365,7 @@ impl Scene {
             }
         }
         if f.arm.is_some() || !f.loads.is_empty() {
-            w.push("warning: `[arm]`, `[[loads]]` and `[sensor]` are used by `estimate` and `tune`; the other commands model the uniform `[beam]` shaken at its base".into());
+            w.push("warning: `[arm]`, `[[loads]]` and `[[sensors]]` are used by `estimate` and `tune`; the other commands model the uniform `[beam]` shaken at its base".into());
         }
         w
     }

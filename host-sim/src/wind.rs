@@ -66,6 +66,13 @@ pub enum LoadComponent {
         head_force_area: f64,
         /// Random seed.
         seed: u64,
+        /// Spectrum of the vertical gust: `kaimal` (default) or `von-karman`.
+        #[serde(default)]
+        spectrum: Spectrum,
+        /// Integral length scale of the vertical gust \[m\] (von Kármán only; default half
+        /// the height, Simiu & Scanlan 1996).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        length_scale: Option<f64>,
     },
     /// Truck-induced gust: half-sine pressure pulses on a stretch of the arm.
     TruckGust {
@@ -85,6 +92,18 @@ pub enum LoadComponent {
         /// File, relative to the scene file.
         file: PathBuf,
     },
+}
+
+/// The spectrum of the vertical gust of [`LoadComponent::Buffeting`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Spectrum {
+    /// Kaimal et al. 1972: `n S_w / σ² ∝ 2f / (1 + 5.3 f^{5/3})`, `f = n z / U`.
+    #[default]
+    Kaimal,
+    /// von Kármán (vertical component; ESDU 85020, Simiu & Scanlan 1996):
+    /// `n S_w / σ² = 4 f (1 + 755.2 f²) / (1 + 283.2 f²)^{11/6}`, `f = n L_w / U`.
+    VonKarman,
 }
 
 /// The arm's outer diameter along its length (the projected width for the wind).
@@ -190,10 +209,17 @@ pub fn kaimal_vertical(n: f64, height: f64, speed: f64) -> f64 {
     2.0 * f / (1.0 + 5.3 * f.powf(5.0 / 3.0)) / n
 }
 
+/// von Kármán's vertical spectrum shape `n S_w(n) / σ² = 4f (1 + 755.2 f²) / (1 + 283.2 f²)^{11/6}`,
+/// `f = n L / U`, as a one-sided density in n (unnormalized).
+pub fn von_karman_vertical(n: f64, length: f64, speed: f64) -> f64 {
+    let f = n * length / speed;
+    4.0 * f * (1.0 + 755.2 * f * f) / (1.0 + 283.2 * f * f).powf(11.0 / 6.0) / n
+}
+
 /// Frequencies of the synthesized gust: 0.002 … 20 Hz, log-spaced.
 const GUST_BAND: (f64, f64, usize) = (0.002, 20.0, 1500);
 
-fn gust_series(sigma: f64, height: f64, speed: f64, seed: u64) -> Series {
+fn gust_series(sigma: f64, shape: &dyn Fn(f64) -> f64, seed: u64) -> Series {
     let (lo, hi, n) = GUST_BAND;
     let mut rng = Rng::new(seed);
     let ratio = (hi / lo).powf(1.0 / n as f64);
@@ -205,7 +231,7 @@ fn gust_series(sigma: f64, height: f64, speed: f64, seed: u64) -> Series {
         let (f0, f1) = (lo * ratio.powi(k as i32), lo * ratio.powi(k as i32 + 1));
         // Frequency jittered inside its band: no exact period of the sum.
         let f = f0 + (f1 - f0) * rng.uniform();
-        let s = kaimal_vertical(f, height, speed) * (f1 - f0);
+        let s = shape(f) * (f1 - f0);
         var += s;
         amp.push(s);
         omega.push(2.0 * PI * f);
@@ -274,6 +300,8 @@ impl LoadModel {
                     drag_coefficient,
                     head_force_area,
                     seed,
+                    spectrum,
+                    length_scale,
                 } => {
                     pos(*mean_speed, "mean_speed")?;
                     pos(*turbulence_intensity, "turbulence_intensity")?;
@@ -286,10 +314,27 @@ impl LoadModel {
                         );
                     }
                     let sigma_w = 0.5 * turbulence_intensity * mean_speed;
+                    let (z, u) = (*height, *mean_speed);
+                    let series = match spectrum {
+                        Spectrum::Kaimal => {
+                            if length_scale.is_some() {
+                                bail!(
+                                    "invalid value for `{}`: only for `spectrum = \"von-karman\"`",
+                                    key("length_scale")
+                                );
+                            }
+                            gust_series(sigma_w, &|n| kaimal_vertical(n, z, u), *seed)
+                        }
+                        Spectrum::VonKarman => {
+                            let l = length_scale.unwrap_or(0.5 * z);
+                            pos(l, "length_scale")?;
+                            gust_series(sigma_w, &|n| von_karman_vertical(n, l, u), *seed)
+                        }
+                    };
                     Part::Gust {
                         arm: 0.5 * AIR_DENSITY * mean_speed * drag_coefficient,
                         head: 0.5 * AIR_DENSITY * mean_speed * head_force_area,
-                        series: gust_series(sigma_w, *height, *mean_speed, *seed),
+                        series,
                     }
                 }
                 LoadComponent::TruckGust {
@@ -390,6 +435,35 @@ impl LoadModel {
     }
 }
 
+impl LoadModel {
+    /// The root-moment-equivalent tip force at time `t` \[N\]: the tip force plus the line
+    /// loads' moment about the root over the arm's length (on `n` elements).
+    pub fn tip_equivalent(&self, t: f64, n: usize) -> f64 {
+        let (tip, line) = self.sample(t, n);
+        let l = self.taper.length / n as f64;
+        let moment: f64 = line
+            .iter()
+            .enumerate()
+            .map(|(k, w)| w * l * (k as f64 + 0.5) * l)
+            .sum();
+        tip + moment / self.taper.length
+    }
+
+    /// RMS of the tip-equivalent force's change per step `h` over `duration` \[N\]: how fast
+    /// the site's design loads move, the scale of a monitor's load model.
+    pub fn increment_rms(&self, h: f64, duration: f64) -> f64 {
+        let steps = (duration / h).round().max(1.0) as usize;
+        let mut last = self.tip_equivalent(0.0, 16);
+        let mut sum = 0.0;
+        for k in 1..=steps {
+            let x = self.tip_equivalent(k as f64 * h, 16);
+            sum += (x - last) * (x - last);
+            last = x;
+        }
+        (sum / steps as f64).sqrt()
+    }
+}
+
 fn parse_table(text: &str) -> Result<Vec<[f64; 3]>> {
     let mut rows: Vec<[f64; 3]> = Vec::new();
     for (i, line) in text.lines().enumerate() {
@@ -458,6 +532,8 @@ mod tests {
             drag_coefficient: 1.0,
             head_force_area: 1.0,
             seed: 7,
+            spectrum: Spectrum::Kaimal,
+            length_scale: None,
         };
         let m = LoadModel::new(&[c], taper(), Path::new(".")).expect("valid");
         let head = 0.5 * AIR_DENSITY * 10.0;
@@ -468,6 +544,46 @@ mod tests {
         let sd = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / xs.len() as f64).sqrt();
         assert!((sd / 1.0 - 1.0).abs() < 0.05, "σ_w {sd} vs 1.0");
         assert!(mean.abs() < 0.05, "mean {mean}");
+    }
+
+    /// von Kármán's vertical spectrum is normalized (∫ S dn = σ², here over 1e-6 … 1e4 Hz of
+    /// the `L/U = 0.3 s` of the von Kármán scene: the tails beyond hold < 0.5 %), falls as
+    /// f^(−5/3) in the inertial subrange, and the synthesized gust has the scene's σ_w.
+    #[test]
+    fn buffeting_gust_has_the_von_karman_spectrum_and_variance() {
+        let (l, u) = (3.0, 10.0);
+        let (lo, hi, n) = (1e-6f64, 1e4f64, 200_000);
+        let r = (hi / lo).ln() / n as f64;
+        let integral: f64 = (0..n)
+            .map(|k| {
+                let f = lo * ((k as f64 + 0.5) * r).exp();
+                von_karman_vertical(f, l, u) * f * r
+            })
+            .sum();
+        assert!((integral - 1.0).abs() < 0.005, "∫ S dn / σ² = {integral}");
+        // n S(n) ∝ n^(−2/3) far above U/L.
+        let slope = (von_karman_vertical(200.0, l, u) * 200.0
+            / (von_karman_vertical(100.0, l, u) * 100.0))
+            .log2();
+        assert!((slope + 2.0 / 3.0).abs() < 0.01, "slope {slope}");
+        let c = LoadComponent::Buffeting {
+            mean_speed: 10.0,
+            turbulence_intensity: 0.2,
+            height: 7.0,
+            drag_coefficient: 1.0,
+            head_force_area: 1.0,
+            seed: 7,
+            spectrum: Spectrum::VonKarman,
+            length_scale: None,
+        };
+        let m = LoadModel::new(&[c], taper(), Path::new(".")).expect("valid");
+        let head = 0.5 * AIR_DENSITY * 10.0;
+        let xs: Vec<f64> = (0..72_000)
+            .map(|k| m.sample(k as f64 * 0.1, 2).0 / head)
+            .collect();
+        let mean = xs.iter().sum::<f64>() / xs.len() as f64;
+        let sd = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / xs.len() as f64).sqrt();
+        assert!((sd - 1.0).abs() < 0.05, "σ_w {sd} vs 1.0");
     }
 
     /// Vortex shedding: amplitude ½ρU²AC_L and frequency St U / D, on only in its episodes.

@@ -1,4 +1,5 @@
-//! State estimation from a tip accelerometer: the root stress of an arm where no gauge is.
+//! The constant-gain estimator (the baseline the extended Kalman filter replaces): the root
+//! stress of an arm from a tip accelerometer.
 //!
 //! **Design: the nonlinear model as predictor, a constant (steady-state) Kalman gain.** Each
 //! sample the model takes one step ([`crate::Model::step_with_loads`]) under the base

@@ -1,0 +1,555 @@
+//! The twin of a real arm (`host-sim estimate --scene scenes/mast-arm.toml`): the full solver
+//! (16 elements, `f64`) of the scene's arm under its `[[loads]]`, read by its `[[sensors]]`;
+//! the estimators (core, `N = 3`, `f32`, E·I calibrated so that f₁ is the truth's) with each
+//! sensor set the scene allows (tip accelerometer, root strain gauge, both), and the
+//! constant-gain baseline on the accelerometer.
+
+use super::filter::{self, Setup, X_ALPHA, X_NEWMARK};
+use super::{
+    clamp_stress, constant, core, damage_of, rms_about_mean, EstimatorReport, Truth, N,
+    TRUTH_ELEMENTS, TRUTH_TOLERANCE,
+};
+use crate::scene::{Scene, SensorSpec};
+use crate::wind::{LoadModel, Rng};
+use absorber_core::estimator::SensorKind;
+use absorber_core::loads::{arm_section, ArmParams};
+use absorber_core::monitor::fatigue::DetailCategory;
+use absorber_core::monitor::stress::RootSection;
+use absorber_core::{Arm, BeamOnly, Model, Params};
+use anyhow::{anyhow, bail, Result};
+use serde::Serialize;
+
+/// Unknowns of the reduced arm.
+pub const D: usize = 4 * N;
+/// The reduced arm model.
+pub type ArmModel<T> = Model<T, Arm<BeamOnly>, N, D>;
+/// The 16-element core arm (the truth's discretization, for the stress factors).
+type ArmReference = Model<f64, Arm<BeamOnly>, TRUTH_ELEMENTS, { 4 * TRUTH_ELEMENTS }>;
+
+/// The twin's results.
+#[derive(Clone, Debug, Serialize)]
+pub struct TwinReport {
+    /// Top-level verdict: that of the extended Kalman filter with all the scene's sensors.
+    pub verdict: &'static str,
+    /// Simulated time \[s\].
+    pub duration: f64,
+    /// AASHTO category of the root.
+    pub category: String,
+    /// RMS of the true root stress about its mean \[MPa\].
+    pub true_stress_rms_mpa: f64,
+    /// Largest true rainflow range \[MPa\].
+    pub max_range_mpa: f64,
+    /// Static root stress under gravity: truth, estimator's model \[MPa\].
+    pub static_stress_mpa: (f64, f64),
+    /// First frequency of the truth (16 elements) and of the reduced model, calibrated \[Hz\].
+    pub frequencies: (f64, f64),
+    /// The calibration's bending-stiffness factor.
+    pub bending_factor: f64,
+    /// The filter's load model, noise model and stress factors.
+    pub setup: Setup,
+    /// Readings beyond the tip accelerometer's range, in % of its readings.
+    pub clipped_pct: f64,
+    /// The estimators.
+    pub estimators: Vec<EstimatorReport>,
+    /// Stress-range histogram of the truth and of the first estimator with all sensors.
+    pub histogram: Histogram,
+}
+
+/// Rainflow stress-range histogram.
+#[derive(Clone, Debug, Serialize)]
+pub struct Histogram {
+    /// Bin width \[MPa\].
+    pub bin_mpa: f64,
+    /// Cycles per bin, truth.
+    pub truth: Vec<f64>,
+    /// Cycles per bin, estimate.
+    pub estimate: Vec<f64>,
+}
+
+/// Time histories of the twin.
+#[derive(Clone, Debug, Default)]
+pub struct TwinSeries {
+    /// Time \[s\].
+    pub time: Vec<f64>,
+    /// True root stress \[Pa\].
+    pub truth: Vec<f64>,
+    /// Each estimator's root stress \[Pa\] (in the report's order).
+    pub estimates: Vec<Vec<f64>>,
+    /// Measured tip acceleration \[m/s²\] (NaN between readings or without the sensor).
+    pub measured: Vec<f64>,
+}
+
+/// The root section of an arm: `c = D_root / 2`, `I` of the root ring.
+pub fn root_section(params: &Params<f64>, arm: &ArmParams<f64>) -> Result<RootSection<f64>> {
+    let (_, i) = arm.section_at(0.0, params.beam.length);
+    let mut beam = params.beam;
+    beam.inertia = i;
+    RootSection::new(&beam, 0.5 * arm.root_diameter).map_err(core)
+}
+
+/// First frequency of the reduced arm model \[Hz\].
+pub fn reduced_frequency(params: &Params<f64>, arm: &ArmParams<f64>) -> Result<f64> {
+    let m = ArmModel::<f64>::arm_at_rest(*params, arm, 0.0).map_err(core)?;
+    Ok(m.natural_frequencies().map_err(core)?[0])
+}
+
+/// The bending-stiffness factor that gives the reduced model the first frequency `target`
+/// (secant iteration on `f₁ ∝ √factor` to 1e-9 relative).
+pub fn calibrate_bending(params: &Params<f64>, arm: &ArmParams<f64>, target: f64) -> Result<f64> {
+    let mut p = *params;
+    let mut factor = 1.0;
+    for _ in 0..20 {
+        p.calibration.bending_stiffness = factor;
+        let f = reduced_frequency(&p, arm)?;
+        if (f / target - 1.0).abs() < 1e-9 {
+            return Ok(factor);
+        }
+        factor *= (target / f).powi(2);
+    }
+    bail!("the reduced model's bending calibration did not converge")
+}
+
+/// The reduced arm's first two frequencies \[Hz\].
+fn reduced_pair(params: &Params<f64>, arm: &ArmParams<f64>) -> Result<(f64, f64)> {
+    let m = ArmModel::<f64>::arm_at_rest(*params, arm, 0.0).map_err(core)?;
+    let f = m.natural_frequencies().map_err(core)?;
+    Ok((f[0], f[1]))
+}
+
+/// The calibration that gives the reduced arm the truth's first two frequencies `target`: the
+/// E·I factor and the lumped mass fraction (`absorber_core::Calibration`), by Newton on
+/// `(ln f₁, ln f₂)` with a numerical Jacobian, to 1e-9 relative.
+pub fn calibrate_arm(
+    params: &Params<f64>,
+    arm: &ArmParams<f64>,
+    target: (f64, f64),
+) -> Result<absorber_core::Calibration<f64>> {
+    let mut c = params.calibration;
+    let eval = |c: &absorber_core::Calibration<f64>| -> Result<[f64; 2]> {
+        let mut p = *params;
+        p.calibration = *c;
+        let (a, b) = reduced_pair(&p, arm)?;
+        Ok([(a / target.0).ln(), (b / target.1).ln()])
+    };
+    for _ in 0..30 {
+        let r = eval(&c)?;
+        if r[0].abs() < 1e-9 && r[1].abs() < 1e-9 {
+            return Ok(c);
+        }
+        let (db, dl) = (1e-4 * c.bending_stiffness, 1e-4);
+        let mut cb = c;
+        cb.bending_stiffness += db;
+        let rb = eval(&cb)?;
+        let mut cl = c;
+        cl.mass_lumping += dl;
+        let rl = eval(&cl)?;
+        let j = [
+            [(rb[0] - r[0]) / db, (rl[0] - r[0]) / dl],
+            [(rb[1] - r[1]) / db, (rl[1] - r[1]) / dl],
+        ];
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if det.abs() < 1e-300 {
+            break;
+        }
+        c.bending_stiffness -= (j[1][1] * r[0] - j[0][1] * r[1]) / det;
+        c.mass_lumping -= (-j[1][0] * r[0] + j[0][0] * r[1]) / det;
+        if !(c.bending_stiffness > 0.0 && (0.0..=1.0).contains(&c.mass_lumping)) {
+            bail!("the reduced arm's calibration to f1 and f2 left its range (E·I factor {}, lumping {})", c.bending_stiffness, c.mass_lumping);
+        }
+    }
+    bail!("the reduced arm's calibration to f1 and f2 did not converge")
+}
+
+/// The arm of a scene: parameters, arm, category, sensors, loads.
+pub struct ArmScene {
+    /// Parameters.
+    pub params: Params<f64>,
+    /// The arm.
+    pub arm: ArmParams<f64>,
+    /// AASHTO category of its root.
+    pub category: DetailCategory,
+    /// The monitor's sensors.
+    pub specs: Vec<SensorSpec>,
+    /// Its loads.
+    pub loads: LoadModel,
+}
+
+impl ArmScene {
+    /// The arm scene of `scene` (errors name what is missing).
+    pub fn of(scene: &Scene) -> Result<Self> {
+        let f = &scene.file;
+        let arm_file = f
+            .arm
+            .as_ref()
+            .ok_or_else(|| anyhow!("`estimate` needs a scene with an `[arm]`"))?;
+        let specs = f.sensor_specs();
+        if specs.is_empty() {
+            bail!("`estimate` needs a scene with `[[sensors]]`");
+        }
+        let params = scene.params()?;
+        let loads = LoadModel::new(
+            &f.loads,
+            crate::scene::taper_of(arm_file, params.beam.length),
+            &scene.base_dir,
+        )?;
+        Ok(Self {
+            arm: arm_file.params()?,
+            category: arm_file.detail_category()?,
+            params,
+            specs,
+            loads,
+        })
+    }
+}
+
+/// The full solver of the arm under the tip and line loads of `loads(t)`.
+fn truth(
+    a: &ArmScene,
+    steps: usize,
+    loads: &dyn Fn(f64) -> (f64, Vec<f64>),
+) -> Result<(Truth, f64)> {
+    let params = a.params;
+    let h = params.integrator.step;
+    let mut pt = params;
+    pt.integrator.tolerance = TRUTH_TOLERANCE;
+    let mut s = crate::full::FullSolver::arm_at_rest(
+        pt,
+        crate::full::SceneKind::BeamOnly,
+        TRUTH_ELEMENTS,
+        &a.arm,
+        0.0,
+    )
+    .map_err(core)?;
+    let f1 = s.frequencies().map_err(core)?[0];
+    let section = root_section(&params, &a.arm)?;
+    let sec0 = arm_section(
+        &a.arm,
+        &params.beam,
+        &params.calibration,
+        params.damping.stiffness_proportional,
+        0,
+        TRUTH_ELEMENTS,
+    );
+    let stress_of = |st: &crate::full::FullState, line0: f64| {
+        let applied =
+            sec0.weight(params.gravity + st.base_accel) + sec0.beam.element.line_load_force(line0);
+        clamp_stress(&sec0.beam, applied, &section, st)
+    };
+    let tip = 4 * TRUTH_ELEMENTS + 1;
+    let static_stress = stress_of(s.state(), 0.0);
+    let mut t = Truth {
+        stress: vec![static_stress],
+        static_stress,
+        tip_accel: vec![s.state().a[tip]],
+        ball_angle: vec![0.0; steps + 1],
+        base_accel: vec![0.0; steps + 1],
+        modulus: params.beam.modulus,
+        impacts: 0,
+        flying: 0,
+        kind: "locked",
+    };
+    for k in 1..=steps {
+        let time = k as f64 * h;
+        let (p, line) = loads(time);
+        s.set_loads(p, &line).map_err(core)?;
+        s.step(0.0)
+            .map_err(|e| anyhow!("truth step at t = {time:.3} s: {e}"))?;
+        t.stress.push(stress_of(s.state(), line[0]));
+        t.tip_accel.push(s.state().a[tip]);
+    }
+    Ok((t, f1))
+}
+
+/// The filter's setup for the arm (module doc of [`filter`]): corner at f₁, load scale from
+/// the design loads' increments, stress factors from the 16-element arm, ε from a calibration
+/// run under a seeded broadband tip force.
+fn setup(a: &ArmScene, pc: &Params<f64>, section: &RootSection<f64>, window: u32) -> Result<Setup> {
+    let h = pc.integrator.step;
+    let model = ArmModel::<f64>::arm_at_rest(*pc, &a.arm, 0.0).map_err(core)?;
+    let ours = filter::modal_stress_ratios(&model, section)?;
+    let reference = ArmReference::arm_at_rest(a.params, &a.arm, 0.0).map_err(core)?;
+    let theirs = filter::modal_stress_ratios(&reference, section)?;
+    let history: Vec<f64> = (0..=(600.0 / h).round() as usize)
+        .map(|k| a.loads.tip_equivalent(k as f64 * h, TRUTH_ELEMENTS))
+        .collect();
+    let (load_sd, corner) = filter::load_prior(&history, h);
+    let (factors, mode_frequencies) = filter::stress_factors(ours, theirs, corner);
+    let mut s = Setup {
+        load_sd,
+        load_corner: corner,
+        model_error: 0.0,
+        event_error: 0.0,
+        stress_factors: factors,
+        mode_frequencies,
+        window,
+        adapt_time: filter::adapt_time(),
+    };
+    // Calibration: 60 s of a Gauss–Markov tip force at the corner with the load model's sd.
+    const SECONDS: f64 = 60.0;
+    let steps = (SECONDS / h).round() as usize;
+    let phi = (-corner * h).exp();
+    let mut rng = Rng::new(0x5EED);
+    let mut force = vec![0.0; steps + 2];
+    for k in 1..force.len() {
+        force[k] = phi * force[k - 1] + s.load_sd * (1.0 - phi * phi).sqrt() * rng.normal();
+    }
+    let loads = |t: f64| {
+        (
+            force.get((t / h).round() as usize).copied().unwrap_or(0.0),
+            vec![0.0; TRUTH_ELEMENTS],
+        )
+    };
+    let (t, _) = truth(a, steps, &loads)?;
+    let m = filter::measure(&t, &a.specs, h, 1)?;
+    // ε from the tip accelerometer's innovations: what the online estimate (ADAPT_TIME) has
+    // not yet caught, from the start (a scene without the accelerometer: ε = 0, the online
+    // estimate alone).
+    if m.spec(SensorKind::TipAccel).is_some() {
+        let r = run_filter(pc, a, &s, section, &m, &[SensorKind::TipAccel], &t)?;
+        s.model_error = r.excess.model_error();
+    }
+    Ok(s)
+}
+
+/// One run of the arm's filter (Newmark or generalized-α, as the scene integrates).
+fn run_filter(
+    pc: &Params<f64>,
+    a: &ArmScene,
+    setup: &Setup,
+    section: &RootSection<f64>,
+    m: &filter::Measured,
+    kinds: &[SensorKind],
+    t: &Truth,
+) -> Result<filter::Run> {
+    let h = pc.integrator.step;
+    let cfg = filter::config(setup, section, m, kinds)?;
+    let model = ArmModel::<f32>::arm_at_rest(super::params_f32(pc), &super::arm_f32(&a.arm), 0.0)
+        .map_err(core)?;
+    if pc.integrator.is_newmark() {
+        filter::run::<Arm<BeamOnly>, D, X_NEWMARK>("arm", model, cfg, m, kinds, t, a.category, h)
+    } else {
+        filter::run::<Arm<BeamOnly>, D, X_ALPHA>("arm", model, cfg, m, kinds, t, a.category, h)
+    }
+}
+
+/// The twin of `scene` over `duration` seconds (module doc); `baseline`: the constant-gain
+/// filter's load model.
+pub fn twin(
+    scene: &Scene,
+    duration: f64,
+    baseline: constant::BaselineLoad,
+) -> Result<(TwinReport, TwinSeries)> {
+    if !(duration.is_finite() && duration > 0.0) {
+        bail!("invalid value for `--duration`: {duration} (must be finite and positive)");
+    }
+    baseline.validate()?;
+    let a = ArmScene::of(scene)?;
+    let params = a.params;
+    let h = params.integrator.step;
+    for (i, s) in a.specs.iter().enumerate() {
+        s.every(h, i)?;
+        if s.kind() == SensorKind::BallAngle {
+            bail!("invalid value for `sensors[{i}].type`: the arm has no ball (`ball_angle`)");
+        }
+    }
+    let steps = (duration / h).round() as usize;
+    let (truth, f_truth) = truth(&a, steps, &|t| a.loads.sample(t, TRUTH_ELEMENTS))?;
+    let section = root_section(&params, &a.arm)?;
+    let mut pc = params;
+    pc.calibration.bending_stiffness = calibrate_bending(&params, &a.arm, f_truth)?;
+    let factor = pc.calibration.bending_stiffness;
+    let f_reduced = reduced_frequency(&pc, &a.arm)?;
+    pc.integrator.tolerance = super::ESTIMATOR_TOLERANCE;
+    let window = (1.0 / h).round() as u32;
+    let s = setup(&a, &pc, &section, window)?;
+    // Only the start is known at rest: the loads act from t = 0.
+    let m = filter::measure(&truth, &a.specs, h, 1)?;
+    let has = |k: SensorKind| a.specs.iter().any(|s| s.kind() == k);
+    let all: Vec<SensorKind> = SensorKind::ALL.into_iter().filter(|k| has(*k)).collect();
+    let mut sets: Vec<Vec<SensorKind>> = Vec::new();
+    for set in [
+        vec![SensorKind::TipAccel],
+        vec![SensorKind::RootStrain],
+        all.clone(),
+    ] {
+        if !set.is_empty() && set.iter().all(|k| has(*k)) && !sets.contains(&set) {
+            sets.push(set);
+        }
+    }
+    let mut estimators = Vec::new();
+    let mut estimates = Vec::new();
+    let mut top = "ok";
+    let mut best: Option<usize> = None;
+    for set in &sets {
+        let r = run_filter(&pc, &a, &s, &section, &m, set, &truth)?;
+        if *set == all {
+            top = r.report.verdict;
+            best = Some(estimators.len());
+        }
+        estimators.push(r.report);
+        estimates.push(r.stress);
+    }
+    if let Some(spec) = m.spec(SensorKind::TipAccel) {
+        let noise = constant::FilterNoise {
+            measurement: spec.noise_sd(),
+            load_step: baseline.step.unwrap_or(super::firmware::LOAD_STEP),
+            bias_step: filter::ACCEL_BIAS_WALK,
+            load_time: baseline.time,
+            step: h,
+        };
+        let mut pd = pc;
+        pd.integrator.tolerance = 1e-13;
+        pd.integrator.newton = absorber_core::NewtonKind::Full;
+        let design = ArmModel::<f64>::arm_at_rest(pd, &a.arm, 0.0).map_err(core)?;
+        let model =
+            ArmModel::<f32>::arm_at_rest(super::params_f32(&pc), &super::arm_f32(&a.arm), 0.0)
+                .map_err(core)?;
+        let (r, st) = constant::run(
+            "arm", &design, model, &section, &noise, &m, &truth, a.category,
+        )?;
+        estimators.push(r);
+        estimates.push(st);
+    }
+    let (_, _, r_true) = damage_of(a.category, truth.stress.get(1..).unwrap_or_default())?;
+    let best = best.unwrap_or(0);
+    let r_est = match estimates.get(best) {
+        Some(e) => damage_of(a.category, e)?.2,
+        None => Vec::new(),
+    };
+    let max_range = r_true.iter().fold(0.0f64, |m, r| m.max(r.0));
+    // A 1, 2, 5 or 10 MPa… bin: at most 25 bins up to the largest true range.
+    let bin = [1e6, 2e6, 5e6, 1e7, 2e7, 5e7, 1e8]
+        .into_iter()
+        .find(|b| max_range / b < 25.0)
+        .unwrap_or(1e8);
+    let bins = ((max_range / bin).floor() as usize + 1).min(1000);
+    let hist = |r: &[(f64, f64)]| {
+        let mut hv = vec![0.0; bins];
+        for (x, count) in r.iter().filter(|(x, _)| x.is_finite()) {
+            if let Some(b) = hv.get_mut(((x / bin).floor() as usize).min(bins - 1)) {
+                *b += count;
+            }
+        }
+        hv
+    };
+    let accel = m.values[SensorKind::TipAccel.index()].as_ref();
+    let clipped = estimators
+        .iter()
+        .find(|e| e.estimator == "ekf" && e.sensors.contains(&SensorKind::TipAccel.id()))
+        .map_or(0, |e| e.clipped[SensorKind::TipAccel.index()]);
+    let readings = accel.map_or(0, |v| v.iter().skip(1).flatten().count());
+    let static_est = ArmModel::<f64>::arm_at_rest(pc, &a.arm, 0.0)
+        .map(|m| section.stress_of_moment(absorber_core::monitor::stress::root_reaction_moment(&m)))
+        .map_err(core)?;
+    let report = TwinReport {
+        verdict: top,
+        duration,
+        category: a.category.name().into(),
+        true_stress_rms_mpa: rms_about_mean(&truth.stress) / 1e6,
+        max_range_mpa: max_range / 1e6,
+        static_stress_mpa: (truth.static_stress / 1e6, static_est / 1e6),
+        frequencies: (f_truth, f_reduced),
+        bending_factor: factor,
+        setup: s,
+        clipped_pct: 100.0 * clipped as f64 / readings.max(1) as f64,
+        estimators,
+        histogram: Histogram {
+            bin_mpa: bin / 1e6,
+            truth: hist(&r_true),
+            estimate: hist(&r_est),
+        },
+    };
+    let series = TwinSeries {
+        time: (1..=steps).map(|k| k as f64 * h).collect(),
+        truth: truth.stress.get(1..).unwrap_or_default().to_vec(),
+        estimates,
+        measured: (1..=steps)
+            .map(|k| {
+                accel
+                    .and_then(|v| v.get(k).copied().flatten())
+                    .unwrap_or(f64::NAN)
+            })
+            .collect(),
+    };
+    Ok((report, series))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(name: &str) -> Scene {
+        Scene::load(&format!("{}/../scenes/{name}", env!("CARGO_MANIFEST_DIR"))).expect("scene")
+    }
+
+    fn find<'a>(r: &'a TwinReport, estimator: &str, sensors: &[&str]) -> &'a EstimatorReport {
+        r.estimators
+            .iter()
+            .find(|e| e.estimator == estimator && e.sensors == sensors)
+            .unwrap_or_else(|| panic!("no {estimator} {sensors:?}"))
+    }
+
+    /// The mast arm under first-mode wind (10 min: gusts, trucks, three vortex-shedding
+    /// episodes at f1), truth = full solver (16 elements, f64): the extended Kalman filter on
+    /// the tip accelerometer has a Miner damage ratio within 0.9–1.1 (measured 0.988; the
+    /// first mode's stress factor 1.048 removes the constant-gain filter's −13 %, whose
+    /// 0.867 is held here too as the unchanged baseline) and a stress RMS error ≤ 5 %
+    /// (measured 2.9 %; the baseline's 5.0 %).
+    #[test]
+    fn ekf_removes_the_first_mode_damage_bias() {
+        let (r, s) = twin(
+            &scene("mast-arm.toml"),
+            600.0,
+            constant::BaselineLoad::default(),
+        )
+        .expect("twin");
+        assert_eq!(s.time.len(), 60_000);
+        let tip = find(&r, "ekf", &["tip_accel"]);
+        assert_eq!(tip.failed, 0);
+        assert!((0.9..=1.1).contains(&tip.damage_ratio), "{tip:?}");
+        assert!(tip.stress_rms_error_pct <= 5.0, "{tip:?}");
+        let both = find(&r, "ekf", &["tip_accel", "root_strain"]);
+        assert!((0.9..=1.1).contains(&both.damage_ratio), "{both:?}");
+        let before = find(&r, "constant-gain", &["tip_accel"]);
+        assert!((before.damage_ratio - 0.867).abs() < 0.005, "{before:?}");
+        assert!(
+            (before.stress_rms_error_pct - 5.0).abs() < 0.1,
+            "{before:?}"
+        );
+    }
+
+    /// Second-mode vortex lock-in (4.70 Hz at 19.6 m/s, three episodes): with a ±8 g
+    /// accelerometer (no clipping) the filter meets ≤ 15 % and a damage ratio of 0.8–1.25
+    /// (measured 6.7 %, 0.835; with the strain gauge 3.5 %, 0.98); with the shipped ±2 g
+    /// part, which clips 28 % of the readings, the clipped readings are detected and the
+    /// verdict is never `ok`.
+    #[test]
+    fn second_mode_lock_in_is_estimated_and_clipping_is_flagged() {
+        let (r, _) = twin(
+            &scene("mast-arm-second-mode.toml"),
+            600.0,
+            constant::BaselineLoad::default(),
+        )
+        .expect("twin");
+        let tip = find(&r, "ekf", &["tip_accel"]);
+        assert!(tip.stress_rms_error_pct <= 15.0, "{tip:?}");
+        assert!((0.8..=1.25).contains(&tip.damage_ratio), "{tip:?}");
+        assert_eq!(tip.clipped, [0, 0, 0]);
+        let (r, _) = twin(
+            &scene("mast-arm-second-mode-2g.toml"),
+            600.0,
+            constant::BaselineLoad::default(),
+        )
+        .expect("twin");
+        assert_ne!(r.verdict, "ok");
+        assert!(r.clipped_pct > 20.0, "{}", r.clipped_pct);
+        for e in r
+            .estimators
+            .iter()
+            .filter(|e| e.sensors.contains(&"tip_accel"))
+        {
+            assert_ne!(e.verdict, "ok", "{e:?}");
+            assert!(e.clipped[0] > 0, "{e:?}");
+        }
+    }
+}

@@ -1,0 +1,289 @@
+//! The monitor's estimators against the full solver: `host-sim estimate`.
+//!
+//! **Truth**: the full solver (16 elements, `f64`), free ball with flight where the scene has
+//! one, under loads the estimators never see. **Measurements**: each sensor of the scene's
+//! `[[sensors]]` reads the truth ([`crate::scene::SensorSpec::read`]: bias, white noise,
+//! quantization, clipping at the range, its own rate). **Estimators**: the core (`N = 3`,
+//! `f32`, calibrated to the 16-element reference), either the extended Kalman filter of
+//! [`absorber_core::estimator::ekf`] with a subset of the sensors ([`filter`]) or the
+//! constant-gain filter it replaces ([`constant`], tip accelerometer only). **Scores** per
+//! estimator: RMS of the dynamic root-stress error (each stress minus its own static value) in
+//! % of the truth's RMS about its mean; Miner damage ratio estimated / true (rainflow of the
+//! core's monitor, the arm's AASHTO category, straight S–N line); the mean normalized
+//! innovation squared per scalar measurement (NIS, 1 for a consistent filter); the health
+//! verdict.
+//!
+//! Two studies: the arm of a scene with `[arm]` and `[[loads]]` ([`arm`]: the twin of a real
+//! mast arm under wind) and the paper's lab arm with its free ball under a wind-like tip force
+//! ([`lab`]: where the absorber works).
+
+pub mod arm;
+pub mod constant;
+pub mod filter;
+pub mod firmware;
+pub mod lab;
+pub mod table;
+
+pub use arm::{twin, TwinReport};
+pub use constant::{design, BaselineLoad, FilterNoise};
+pub use lab::{lab, LabReport};
+
+use absorber_core::monitor::fatigue::{DetailCategory, StressDamage};
+use absorber_core::monitor::rainflow::Cycle;
+use absorber_core::monitor::stress::RootSection;
+use absorber_core::{ArmParams, Params};
+use anyhow::{anyhow, Result};
+use serde::Serialize;
+
+/// The estimator's model: `N = 3` elements.
+pub const N: usize = 3;
+/// Newton tolerance of the estimator's model (scaled position increment): the finest `f32`
+/// allows (8ε rounded up). The predicted measurement is an acceleration, and Newmark's
+/// acceleration carries a position error divided by `βh²`: a coarser tolerance would bound it
+/// only by several m/s².
+pub const ESTIMATOR_TOLERANCE: f64 = 1e-6;
+/// Newton tolerance of the truth (`f64`): its accelerations are the measurement.
+pub const TRUTH_TOLERANCE: f64 = 1e-11;
+/// Elements of the truth.
+pub const TRUTH_ELEMENTS: usize = 16;
+
+/// `absorber_core::Error` → `anyhow`.
+pub(crate) fn core(e: absorber_core::Error) -> anyhow::Error {
+    anyhow!("{e}")
+}
+
+/// What the truth did, per step (index 0 is the start, at rest), for the scores and the
+/// sensors.
+#[derive(Clone, Debug, Default)]
+pub struct Truth {
+    /// Root stress at the clamp \[Pa\].
+    pub stress: Vec<f64>,
+    /// Static root stress under gravity \[Pa\].
+    pub static_stress: f64,
+    /// Absolute vertical tip acceleration \[m/s²\].
+    pub tip_accel: Vec<f64>,
+    /// Ball angle relative to the housing \[rad\] (zero without a ball).
+    pub ball_angle: Vec<f64>,
+    /// Base acceleration \[m/s²\] (the estimators' known input).
+    pub base_accel: Vec<f64>,
+    /// Young's modulus of the root section \[Pa\] (strain = stress / E).
+    pub modulus: f64,
+    /// Stop impacts.
+    pub impacts: u64,
+    /// Steps with the ball in flight.
+    pub flying: usize,
+    /// `free` (a free ball) or `locked` (a ball fixed in its housing, or none).
+    pub kind: &'static str,
+}
+
+impl Truth {
+    /// The value a sensor of `kind` reads at step `k` (before its own errors).
+    pub fn value(&self, kind: absorber_core::estimator::SensorKind, k: usize) -> f64 {
+        use absorber_core::estimator::SensorKind;
+        let at = |v: &[f64]| v.get(k).copied().unwrap_or(0.0);
+        match kind {
+            SensorKind::TipAccel => at(&self.tip_accel) + at(&self.base_accel),
+            SensorKind::BallAngle => at(&self.ball_angle),
+            SensorKind::RootStrain => at(&self.stress) / self.modulus,
+        }
+    }
+
+    /// Steps taken (the start excluded).
+    pub fn steps(&self) -> usize {
+        self.stress.len().saturating_sub(1)
+    }
+}
+
+/// One estimator's scores against one truth (the JSON of `estimate --json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct EstimatorReport {
+    /// `ekf` (the extended Kalman filter) or `constant-gain` (the filter it replaces).
+    pub estimator: &'static str,
+    /// The estimator's model: `free-ball`, `locked-ball` (the ball left out) or `arm`.
+    pub model: &'static str,
+    /// Sensors it reads: ids `tip_accel`, `ball_angle`, `root_strain`.
+    pub sensors: Vec<&'static str>,
+    /// The truth it is fed: `free` (free ball with flight) or `locked` (no moving ball).
+    pub truth: &'static str,
+    /// RMS of the dynamic root-stress error, % of the truth's RMS about its mean.
+    pub stress_rms_error_pct: f64,
+    /// Miner damage estimated / true (straight S–N line).
+    pub damage_ratio: f64,
+    /// Mean normalized innovation squared per scalar measurement (1: consistent); NaN for
+    /// the constant-gain filter, whose innovations' sd is its steady-state one (the ratio of
+    /// their RMS is `innovation_ratio`).
+    pub nis: f64,
+    /// Health verdict of the run: `failed` if the estimate was failed for ≥ 1 % of the
+    /// samples, else `degraded` if it was degraded or worse for ≥ 1 %, else `ok`.
+    pub verdict: &'static str,
+    /// Fraction of the samples with each verdict (ok, degraded, failed).
+    pub verdict_fractions: [f64; 3],
+    /// Share of the estimated damage accumulated while the verdict was not `ok` \[%\].
+    pub damage_degraded_pct: f64,
+    /// Fraction of samples whose stress error lies within ±2 of the filter's own sd.
+    pub within_two_sd: f64,
+    /// RMS of the innovations over their predicted sd (tip accelerometer).
+    pub innovation_ratio: f64,
+    /// Samples the estimator refused (failed steps).
+    pub failed: usize,
+    /// Readings clipped at the range, per sensor kind (tip_accel, ball_angle, root_strain).
+    pub clipped: [usize; 3],
+    /// Readings used with a bounded weight (beyond the filter's gate).
+    pub capped: usize,
+    /// RMS of the estimated tip load \[N\].
+    pub load_rms: f64,
+}
+
+/// The core's fatigue pipeline (as in the firmware) on a stress history: damage without
+/// threshold, with the CAFT cutoff, and the ranges with their counts.
+pub(crate) struct Damage {
+    counter: StressDamage<f64, 512>,
+    ranges: Vec<(f64, f64)>,
+}
+
+impl Damage {
+    pub(crate) fn new(category: DetailCategory) -> Result<Self> {
+        Ok(Self {
+            counter: StressDamage::new(category).map_err(core)?,
+            ranges: Vec::new(),
+        })
+    }
+
+    pub(crate) fn push(&mut self, x: f64) -> Result<()> {
+        let r = &mut self.ranges;
+        self.counter
+            .push(x, &mut |cy: &Cycle<f64>| r.push((cy.range, cy.count())))
+            .map_err(core)
+    }
+
+    /// As [`Damage::push`], handing every cycle it closes to `f` too.
+    pub(crate) fn push_with(&mut self, x: f64, f: &mut impl FnMut(&Cycle<f64>)) -> Result<()> {
+        let r = &mut self.ranges;
+        self.counter
+            .push(x, &mut |cy: &Cycle<f64>| {
+                r.push((cy.range, cy.count()));
+                f(cy);
+            })
+            .map_err(core)
+    }
+
+    /// Damage so far, the open residue as half cycles: (extended, cutoff).
+    pub(crate) fn damage(&self) -> (f64, f64) {
+        self.counter.damage()
+    }
+
+    pub(crate) fn finish(mut self) -> (f64, f64, Vec<(f64, f64)>) {
+        let (e, c) = self.counter.damage();
+        let r = &mut self.ranges;
+        self.counter
+            .rainflow()
+            .residue(&mut |cy: Cycle<f64>| r.push((cy.range, cy.count())));
+        (e, c, self.ranges)
+    }
+}
+
+/// Damage without threshold, with the cutoff, and the ranges with their counts.
+pub(crate) type DamageSum = (f64, f64, Vec<(f64, f64)>);
+
+/// Miner damage of a stress history \[Pa\].
+pub(crate) fn damage_of(category: DetailCategory, x: &[f64]) -> Result<DamageSum> {
+    let mut d = Damage::new(category)?;
+    for v in x {
+        d.push(*v)?;
+    }
+    Ok(d.finish())
+}
+
+/// Mean of `x`.
+pub(crate) fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+/// RMS of `x`.
+pub(crate) fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+/// RMS of `x` about its mean.
+pub(crate) fn rms_about_mean(x: &[f64]) -> f64 {
+    let m = mean(x);
+    (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+/// RMS of the dynamic stress error in % of the truth's RMS about its mean: each history minus
+/// its own static stress (`estimate[k]` against `truth.stress[k + 1]`).
+pub(crate) fn stress_error_pct(truth: &Truth, estimate: &[f64], static_estimate: f64) -> f64 {
+    let offset = static_estimate - truth.static_stress;
+    let t = truth.stress.get(1..).unwrap_or_default();
+    let err: Vec<f64> = estimate
+        .iter()
+        .zip(t)
+        .map(|(e, tr)| e - tr - offset)
+        .collect();
+    100.0 * rms(&err) / rms_about_mean(t)
+}
+
+/// The root stress of the full solver's state from the clamp reaction of its element 0: `−r₃`
+/// of the element residual `M ä + K (u + c u̇) + Q_l(u) − applied` is the moment the clamp
+/// carries (the core's formula of [`absorber_core::monitor::stress`] on the full solver's
+/// coordinates).
+pub(crate) fn clamp_stress(
+    b: &absorber_core::beam::Beam<f64>,
+    applied: absorber_core::ancf::ElementVector<f64>,
+    section: &RootSection<f64>,
+    st: &crate::full::FullState,
+) -> f64 {
+    use absorber_core::ancf::ElementVector;
+    let u = ElementVector::<f64>::from_fn(|i, _| st.q[i]);
+    let v = ElementVector::<f64>::from_fn(|i, _| st.v[i]);
+    let a = ElementVector::<f64>::from_fn(|i, _| st.a[i]);
+    let r = b.mass * a + b.stiffness * (u + v * b.damping) + b.quadrature.force(&u) - applied;
+    section.stress_of_moment(-r[3])
+}
+
+/// The `f32` parameters of a model (the firmware's and the estimators' precision).
+pub fn params_f32(p: &Params<f64>) -> Params<f32> {
+    crate::core_sim::params_f32(p)
+}
+
+/// The `f32` arm.
+pub fn arm_f32(a: &ArmParams<f64>) -> ArmParams<f32> {
+    let mut pm = [absorber_core::PointMass {
+        position: 0.0f32,
+        mass: 0.0,
+    }; absorber_core::loads::MAX_POINT_MASSES];
+    for (d, s) in pm.iter_mut().zip(a.point_masses.iter()) {
+        d.position = s.position as f32;
+        d.mass = s.mass as f32;
+    }
+    ArmParams {
+        root_diameter: a.root_diameter as f32,
+        tip_diameter: a.tip_diameter as f32,
+        wall: a.wall as f32,
+        density: a.density as f32,
+        point_masses: pm,
+    }
+}
+
+/// The `f32` root section.
+pub fn section_f32(s: &RootSection<f64>) -> RootSection<f32> {
+    RootSection {
+        bending_rigidity: s.bending_rigidity as f32,
+        stress_per_curvature: s.stress_per_curvature as f32,
+        extreme_fibre: s.extreme_fibre as f32,
+    }
+}
+
+/// The worst verdict over the reports of the estimators a monitor with the scene's sensors
+/// would run (their `verdict`), for the top-level `verdict` of `estimate --json`.
+pub fn worst_verdict<'a>(reports: impl Iterator<Item = &'a EstimatorReport>) -> &'static str {
+    let rank = |v: &str| match v {
+        "failed" => 2,
+        "degraded" => 1,
+        _ => 0,
+    };
+    reports
+        .map(|r| r.verdict)
+        .max_by_key(|v| rank(v))
+        .unwrap_or("ok")
+}
