@@ -107,23 +107,12 @@ fn reseeded(loads: &[LoadComponent], seed: u64) -> Vec<LoadComponent> {
     let mut rng = crate::wind::Rng::new(seed);
     loads
         .iter()
-        .map(|c| match c {
-            LoadComponent::Buffeting {
-                mean_speed,
-                turbulence_intensity,
-                height,
-                drag_coefficient,
-                head_force_area,
-                ..
-            } => LoadComponent::Buffeting {
-                mean_speed: *mean_speed,
-                turbulence_intensity: *turbulence_intensity,
-                height: *height,
-                drag_coefficient: *drag_coefficient,
-                head_force_area: *head_force_area,
-                seed: rng.next_u64(),
-            },
-            other => other.clone(),
+        .map(|c| {
+            let mut c = c.clone();
+            if let LoadComponent::Buffeting { seed, .. } = &mut c {
+                *seed = rng.next_u64();
+            }
+            c
         })
         .collect()
 }
@@ -196,7 +185,7 @@ pub fn record(
         crate::scene::taper_of(arm_file, params.beam.length),
         &scene.base_dir,
     )?;
-    let section = crate::estimate::root_section(&params, &arm)?;
+    let section = crate::estimate::arm::root_section(&params, &arm)?;
     let run = Run {
         params,
         arm,
