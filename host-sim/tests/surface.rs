@@ -145,3 +145,23 @@ fn jobs_are_capped_at_the_points_and_the_cores() {
         .unwrap();
     assert!((1..=2).contains(&threads), "{e}");
 }
+
+/// `estimate` bounds its work before allocating (before: `--duration 1e9` aborted with "memory
+/// allocation of 800000000000 bytes failed", `--duration 0.01` printed "inf %", `--lab
+/// --frequency 400` ran above the 166.7 Hz Nyquist limit and printed a 263,770 % error).
+#[test]
+fn estimate_has_runs_limits() {
+    let arm = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/mast-arm.toml");
+    refused(
+        &run(&["estimate", "--scene", arm, "--duration", "1e9"]),
+        &["`--duration`", "1000000000", "steps"],
+    );
+    refused(
+        &run(&["estimate", "--lab", "--duration", "0.01"]),
+        &["`--duration`", "0.01"],
+    );
+    refused(
+        &run(&["estimate", "--lab", "--frequency", "400"]),
+        &["`--frequency`", "Nyquist"],
+    );
+}

@@ -11,10 +11,36 @@ use crate::scene::Scene;
 use anyhow::{bail, Result};
 
 /// Runs the command.
+/// Most steps a study runs: the truth, the estimators and their histories are held in memory
+/// (a few hundred bytes per step: about 2 GB here); 2^23 steps are 23 h at the arm's 10 ms.
+const MAX_STEPS: f64 = 8_388_608.0;
+
+/// Fewest steps a study runs: its statistics (RMS errors, damage ratios) need a response to
+/// measure; 100 steps are 1 s at the arm's 10 ms.
+const MIN_STEPS: f64 = 100.0;
+
+/// Checks `--duration` against the scene's step before anything is allocated.
+fn check_duration(duration: f64, h: f64) -> Result<()> {
+    let steps = duration / h;
+    if !(duration.is_finite() && (MIN_STEPS..=MAX_STEPS).contains(&steps)) {
+        bail!(
+            "invalid value for `--duration`: {duration} s (must lie in {} ..= {} s: {MIN_STEPS} to {MAX_STEPS} steps of h = {h} s; the study holds every step in memory)",
+            MIN_STEPS * h,
+            MAX_STEPS * h
+        );
+    }
+    Ok(())
+}
+
 pub fn run(a: &EstimateArgs) -> Result<()> {
     if let Some(path) = &a.table {
         if a.lab || a.out.is_some() || a.emit_firmware.is_some() || a.json {
             bail!("`--table` runs every regime and writes its table: give it alone (with `--duration` at most)");
+        }
+        if let Some(d) = a.duration {
+            // The table's regimes run at 3 ms (lab) and 10 ms (arm).
+            check_duration(d, 0.01)?;
+            check_duration(d, 0.003)?;
         }
         return crate::estimate::table::write(path, a.duration);
     }
@@ -29,11 +55,16 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             bail!("`--emit-firmware` takes the arm's scene (`--scene scenes/mast-arm.toml`), not `--lab`");
         }
         let duration = a.duration.unwrap_or(scene.file.duration);
+        let h = scene.file.integrator.step;
+        check_duration(duration, h)?;
         let mut scene = scene;
         if let Some(f) = a.frequency {
             if !(f.is_finite() && f > 0.0) {
                 bail!("invalid value for `--frequency`: {f} (must be finite and positive)");
             }
+            // The Nyquist limit and the resolution warning, as `run` has them.
+            super::check_excitations(&[f], &[], h, "--frequency", "")?;
+            crate::scene::check_harmonic(0.0, f, h, "", "--frequency")?;
             scene.file.excitation.frequency = Some(f);
         }
         let mut out = match &a.out {
@@ -62,6 +93,7 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
         return Ok(());
     }
     let duration = a.duration.unwrap_or(scene.file.duration);
+    check_duration(duration, scene.file.integrator.step)?;
     let mut out = match &a.out {
         Some(dir) => Some(OutputDir::open(dir, Some("estimate"), "estimate")?),
         None => None,
