@@ -11,8 +11,8 @@ mod run;
 mod sweep;
 
 pub use info::{lowest_frequencies, static_summary};
-pub use run::run_in_memory;
-pub use sweep::sweep_in_memory;
+pub use run::{run_ensemble_in_memory, run_in_memory, step_damping_line, summary_in_memory};
+pub use sweep::{sweep_ensemble_in_memory, sweep_in_memory};
 
 use crate::cli::{Cli, Command, PaperArgs, SceneArgs};
 use crate::scene::{ExcitationType, Precision, Scene};
@@ -38,6 +38,7 @@ pub fn dispatch(cli: Cli) -> Result<()> {
         Command::Stability(a) => docs::stability(&a),
         Command::Fatigue(a) => fatigue::run(&a),
         Command::Accuracy(a) => docs::accuracy(&a),
+        Command::Chaos(a) => crate::chaos::run(&a),
         Command::Calibrate(a) => calibrate::calibrate(&a),
         Command::Identify(a) => calibrate::identify(&a),
         Command::Validation(a) => docs::validation(&a),
