@@ -125,7 +125,7 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
         let separations = num(c, "separations");
         if separations > 0.0 {
             lines.push(format!(
-                "ball in flight             {} % of the time ({} % for t ≥ {} s): {} separations, {} landings ({} bounces)",
+                "ball in flight             {} % of the time ({} % for t ≥ {} s): {} separations, {} landings ({} bounces; counts of short hops depend on h: docs/chaos.md)",
                 stat(c, "flight_fraction", 100.0, 1),
                 stat(c, "flight_fraction_steady", 100.0, 1),
                 num(s, "steady_from"),
