@@ -739,7 +739,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let (a, _) = self.end_point(s);
         s.flight.centre = [a[0] + rho * n[0], a[1] + rho * n[1]];
         let normal_speed = n[0] * rel.rate[0] + n[1] * rel.rate[1];
-        if !(normal_speed > lit(GRAZING)) {
+        if normal_speed.partial_cmp(&lit(GRAZING)) != Some(core::cmp::Ordering::Greater) {
             return Ok(false); // grazing: no impulse, the ball flies on
         }
         let speed = crossing_speed.map_or(normal_speed, |c| c.max(T::zero()));
@@ -838,6 +838,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         report.landing = Some(landing);
         report.events.landings += 1;
+        report.events.bounces += u32::from(landing.bounced);
         Ok(true)
     }
 

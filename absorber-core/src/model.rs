@@ -146,6 +146,8 @@ pub struct EventCounts {
     pub separations: u32,
     /// Landings on the track (bounces and rolling landings).
     pub landings: u32,
+    /// The landings that bounced (the ball flew on).
+    pub bounces: u32,
     /// Stop impacts (on the track and in flight, a plastic return onto the stop included).
     pub impacts: u32,
 }

@@ -1958,6 +1958,7 @@ unsafe fn monitor_record<T: Scalar>(
         events: absorber_core::EventCounts {
             separations: u32::from(r.separation != 0),
             landings: u32::from(r.landing != 0),
+            bounces: u32::from(r.landing == 1),
             impacts: u32::from(r.impact != 0),
         },
     };

@@ -77,6 +77,10 @@ pub enum Command {
     /// rainflow, AASHTO S–N, Miner): CSV, PNG and `fatigue.manifest.json`; failed points are
     /// marked as in `sweep` (exit code 3).
     Fatigue(FatigueArgs),
+    /// Writes docs/chaos.md: the free ball's statistics (amplitude, tip RMS, impact rate,
+    /// flight share, separation rate) over steps, meshes and solvers, each an ensemble with its
+    /// spread, and whether the embedded model's converge to the reference.
+    Chaos(crate::chaos::ChaosArgs),
     /// Writes docs/accuracy.md: error of embedded configurations (elements, step, precision,
     /// Newton budget) against a converged full-solver reference, and their run time.
     Accuracy(crate::accuracy::AccuracyArgs),
@@ -168,7 +172,7 @@ pub struct ValidationArgs {
 
 /// Scene selection and the overrides of the model alone (`static`, `modes`, `tune`: no
 /// excitation, duration or step, which they do not use).
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct ModelArgs {
     /// `paper` (built in) or a scene TOML file (e.g. `scenes/mast-arm.toml`).
     #[arg(long, short, default_value = "paper")]
@@ -185,6 +189,19 @@ pub struct ModelArgs {
     /// Scalar (overrides the scene).
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
+}
+
+impl Default for ModelArgs {
+    /// The paper's scene, nothing overridden (what the command line gives without options).
+    fn default() -> Self {
+        Self {
+            scene: "paper".into(),
+            solver: None,
+            kind: None,
+            elements: None,
+            precision: None,
+        }
+    }
 }
 
 impl ModelArgs {
@@ -239,6 +256,15 @@ impl SceneArgs {
             f.kind = v;
         }
         if let Some(v) = self.model.elements {
+            if f.calibration.elements.is_some_and(|n| n != v) {
+                // Calibration factors hold for the mesh they were fitted for only.
+                eprintln!(
+                    "note: the scene's [calibration] was fitted for {} elements; with --elements {v} \
+                     it is left out",
+                    f.calibration.elements.unwrap_or(0)
+                );
+                f.calibration = crate::scene::CalibrationSection::default();
+            }
             f.elements = v;
         }
         if let Some(v) = self.model.precision {
@@ -286,11 +312,34 @@ pub struct ModesArgs {
     pub json: bool,
 }
 
+/// `--ensemble` and `--seed` of `run`, `sweep` and `fatigue`.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct EnsembleArgs {
+    /// Runs of an ensemble: K runs from seeded perturbations of the ball's initial state
+    /// (angle ± 0.1°, orbit rate ± 0.01 rad/s, uniform; member 0 is the scene itself), in
+    /// parallel; every statistic is then reported as mean ± sd (min–max) over the K runs, and
+    /// in JSON as {"mean", "sd", "min", "max", "k"}. 1 (the default): the plain run.
+    #[arg(long, default_value_t = 1)]
+    pub ensemble: usize,
+    /// Seed of the ensemble's perturbations (the same seed gives the same members).
+    #[arg(long, default_value_t = crate::ensemble::DEFAULT_SEED)]
+    pub seed: u64,
+}
+
+impl EnsembleArgs {
+    /// The checked ensemble.
+    pub fn ensemble(&self) -> Result<crate::ensemble::Ensemble> {
+        crate::ensemble::Ensemble::new(self.ensemble, self.seed)
+    }
+}
+
 /// `run`.
 #[derive(Args, Debug)]
 pub struct RunArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
+    #[command(flatten)]
+    pub ensemble: EnsembleArgs,
     /// Output directory (default: the scene's `outputs.directory`).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
@@ -316,6 +365,8 @@ pub struct RunArgs {
 pub struct SweepArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
+    #[command(flatten)]
+    pub ensemble: EnsembleArgs,
     /// Excitation frequencies [Hz] (default: the paper's 14, 3.50 … 4.70).
     #[arg(long, value_delimiter = ',', num_args = 1.., allow_negative_numbers = true)]
     pub freqs: Option<Vec<f64>>,
@@ -416,6 +467,8 @@ pub enum Moment {
 pub struct FatigueArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
+    #[command(flatten)]
+    pub ensemble: EnsembleArgs,
     /// Excitation frequencies [Hz] (default: the paper's 14, 3.50 … 4.70).
     #[arg(long, value_delimiter = ',', num_args = 1.., allow_negative_numbers = true)]
     pub freqs: Option<Vec<f64>>,

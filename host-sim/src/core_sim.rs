@@ -113,6 +113,29 @@ impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator
     fn solver_name(&self) -> &'static str {
         "core"
     }
+
+    fn set_ball_rate(&mut self, rate: f64) -> Result<(), Error> {
+        set_orbit_rate(&mut self.model, rate)
+    }
+}
+
+/// At the start of a run (the housing at rest): the rolling ball's orbit rate θ̇ set to `rate`
+/// \[rad/s\], i.e. its spin rate `φ̇ = −(ρ/r_b) θ̇` (the last unknown), with the consistent
+/// acceleration (`Model::set_configuration`). No effect on a scene without a free ball's spin.
+pub fn set_orbit_rate<T: Real, S: Scene, const N: usize, const D: usize>(
+    model: &mut Model<T, S, N, D>,
+    rate: f64,
+) -> Result<(), Error> {
+    if S::EXTRA_DOFS != 1 {
+        return Ok(());
+    }
+    let s = *model.state();
+    let b = &model.params().ball;
+    let mut v = s.v;
+    if let Some(spin) = v.get_mut(D - 1) {
+        *spin = absorber_core::scalar::lit::<T>(-rate) * b.path_radius() / b.radius;
+    }
+    model.set_configuration(s.q, v, s.base_accel)
 }
 
 /// The parameters rounded to `f32`.

@@ -6,6 +6,7 @@
 //! Damage rate = Miner damage of the whole run (start-up transient included, residue counted as
 //! half cycles) per hour of simulated time. Runs that fail keep what they computed and say why.
 
+use crate::ensemble::Ensemble;
 use crate::excitation::Excitation;
 use absorber_core::monitor::{Monitor, MonitorConfig, NoTwin};
 use absorber_core::{FreeBall, LockedBall, Model, Params, Scene as CoreScene};
@@ -83,12 +84,18 @@ fn run_one<S: CoreScene, const N: usize, const D: usize>(
     config: MonitorConfig<f64>,
     exc: &Excitation,
     steps: usize,
+    rate: f64,
 ) -> RunFatigue {
     let fail = RunFatigue::failed;
     let mut model = match Model::<f64, S, N, D>::at_rest(*params, exc.at(0).accel) {
         Ok(m) => m,
         Err(e) => return fail(e.to_string()),
     };
+    if rate != 0.0 {
+        if let Err(e) = crate::core_sim::set_orbit_rate(&mut model, rate) {
+            return fail(e.to_string());
+        }
+    }
     let mut mon: Monitor<f64, NoTwin> = match Monitor::new(config, &model) {
         Ok(m) => m,
         Err(e) => return fail(e.to_string()),
@@ -127,10 +134,11 @@ fn pair<const N: usize, const D: usize>(
     config: MonitorConfig<f64>,
     exc: &Excitation,
     steps: usize,
+    rate: f64,
 ) -> (RunFatigue, RunFatigue) {
     // D counts the free ball's unknown; the locked scene has one fewer.
     (
-        run_one::<FreeBall, N, D>(params, config, exc, steps),
+        run_one::<FreeBall, N, D>(params, config, exc, steps, rate),
         locked_of::<N>(params, config, exc, steps),
     )
 }
@@ -145,7 +153,7 @@ fn locked_of<const N: usize>(
         N,
         [3, 8, 16],
         0,
-        run_one[LockedBall](params, config, exc, steps),
+        run_one[LockedBall](params, config, exc, steps, 0.0),
         unreachable_count(N)
     )
 }
@@ -160,12 +168,13 @@ fn run_pair(
     config: MonitorConfig<f64>,
     exc: &Excitation,
     steps: usize,
+    rate: f64,
 ) -> Result<(RunFatigue, RunFatigue)> {
     Ok(crate::with_elements!(
         elements,
         [3, 8, 16],
         1,
-        pair[](params, config, exc, steps),
+        pair[](params, config, exc, steps, rate),
         bail!("invalid value for `elements`: {elements} (fatigue supports 3, 8 or 16)")
     ))
 }
@@ -179,6 +188,30 @@ pub fn fatigue_points(
     amplitudes: &[f64],
     duration: f64,
 ) -> Result<Vec<FatiguePoint>> {
+    let members = fatigue_members(
+        params,
+        elements,
+        config,
+        frequencies,
+        amplitudes,
+        duration,
+        Ensemble::single(),
+    )?;
+    Ok(members.into_iter().flatten().collect())
+}
+
+/// The fatigue points of every member of an ensemble ([`crate::ensemble`]: the ball's initial
+/// angle and rate perturbed, the locked ball at the perturbed angle): per frequency ×
+/// amplitude, the K members' points (member 0 first), all runs in parallel.
+pub fn fatigue_members(
+    params: &Params<f64>,
+    elements: usize,
+    config: MonitorConfig<f64>,
+    frequencies: &[f64],
+    amplitudes: &[f64],
+    duration: f64,
+    e: Ensemble,
+) -> Result<Vec<Vec<FatiguePoint>>> {
     for &x in frequencies.iter().chain(amplitudes) {
         if !x.is_finite() || x <= 0.0 {
             bail!("invalid frequency or amplitude {x} (must be finite and positive)");
@@ -186,14 +219,19 @@ pub fn fatigue_points(
     }
     let h = params.integrator.step;
     let steps = (duration / h).round() as usize;
-    let jobs: Vec<(f64, f64)> = amplitudes
+    let jobs: Vec<(f64, f64, usize)> = amplitudes
         .iter()
         .flat_map(|&a| frequencies.iter().map(move |&f| (f, a)))
+        .flat_map(|(f, a)| (0..e.k).map(move |m| (f, a, m)))
         .collect();
-    jobs.par_iter()
-        .map(|&(f, a)| {
+    let points = jobs
+        .par_iter()
+        .map(|&(f, a, m)| {
             let exc = Excitation::harmonic(a, f, h);
-            let (free, locked) = run_pair(elements, params, config, &exc, steps)?;
+            let (angle, rate) = crate::ensemble::perturbation(e.seed, m);
+            let mut p = *params;
+            p.ball.initial_angle += angle.to_radians();
+            let (free, locked) = run_pair(elements, &p, config, &exc, steps, rate)?;
             Ok(FatiguePoint {
                 frequency: f,
                 amplitude: a,
@@ -201,7 +239,41 @@ pub fn fatigue_points(
                 locked,
             })
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    Ok(points.chunks(e.k).map(<[FatiguePoint]>::to_vec).collect())
+}
+
+/// CSV of an ensemble's points: [`csv`] of every run with the member first (0: the scene
+/// itself).
+pub fn csv_members(
+    points: &[Vec<FatiguePoint>],
+    e: Ensemble,
+    category: &str,
+    moment: &str,
+) -> String {
+    let flat: Vec<FatiguePoint> = points.iter().flatten().cloned().collect();
+    let members = points.iter().flat_map(|m| 0..m.len());
+    let text = csv(&flat, category, moment);
+    let mut out = format!(
+        "# ensemble of {} runs per point, seed {} (member 0: the scene itself)\n",
+        e.k, e.seed
+    );
+    let mut lines = text.lines();
+    for line in lines.by_ref() {
+        if line.starts_with('#') {
+            out.push_str(line);
+            out.push('\n');
+        } else {
+            out.push_str("member,");
+            out.push_str(line);
+            out.push('\n');
+            break;
+        }
+    }
+    for (line, m) in lines.zip(members) {
+        out.push_str(&format!("{m},{line}\n"));
+    }
+    out
 }
 
 /// CSV of the points.

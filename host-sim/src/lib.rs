@@ -2,7 +2,8 @@
 //!
 //! Layout (dependencies point down only):
 //! - [`cli`] (options) → [`commands`] (what each command does);
-//! - the studies: [`stability`], [`accuracy`], [`validation`] (they write docs/), [`fatigue`],
+//! - the studies: [`stability`], [`accuracy`], [`validation`], [`chaos`] (they write docs/),
+//!   [`fatigue`], [`ensemble`],
 //!   [`sweep`], [`tune`], [`calibrate`], [`identify`];
 //! - running a scene: [`scene`], [`excitation`], [`run`] (streamed), [`figures`], [`plot`];
 //! - the solvers behind [`sim::Simulator`]: [`core_sim`] (the embedded core; N is picked at
@@ -14,9 +15,11 @@ pub mod sim;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
 pub mod accuracy;
 pub mod calibrate;
+pub mod chaos;
 pub mod cli;
 pub mod commands;
 pub mod core_sim;
+pub mod ensemble;
 pub mod estimate;
 pub mod excitation;
 pub mod fatigue;

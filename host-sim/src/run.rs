@@ -8,6 +8,22 @@ use anyhow::{anyhow, bail, Result};
 
 /// Builds the scene's solver at rest in the static equilibrium with input `base_accel0` at t = 0.
 pub fn build_simulator(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simulator>> {
+    let mut sim = build_at_rest(scene, base_accel0)?;
+    let rate = scene.file.ball.initial_rate;
+    if rate != 0.0 && scene.file.kind.free_ball() {
+        sim.set_ball_rate(rate).map_err(|e| {
+            anyhow!(
+                "cannot start with `ball.initial_rate` = {rate} rad/s: {}",
+                crate::scene::physical_failure(e, scene)
+            )
+        })?;
+    }
+    Ok(sim)
+}
+
+/// The scene's solver at rest in the static equilibrium (the ball at `ball.initial_angle_deg`,
+/// without its initial rate).
+fn build_at_rest(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simulator>> {
     let f = &scene.file;
     let params = scene.params()?;
     match f.solver {
@@ -104,6 +120,9 @@ pub struct Row {
     pub separated: bool,
     /// A landing during the step: `(bounced, required friction |P_t|/P_n)` (not a CSV column).
     pub landing: Option<(bool, f64)>,
+    /// How many separations, landings and stop impacts the step had (a step can hold several;
+    /// not a CSV column: `impact` says whether there was one).
+    pub events: absorber_core::EventCounts,
 }
 
 /// The CSV header (also documents the columns).
@@ -398,6 +417,7 @@ pub fn simulate_with(
             landing: report
                 .and_then(|r| r.landing)
                 .map(|l| (l.bounced, l.required_friction().unwrap_or(f64::NAN))),
+            events: report.map_or_else(Default::default, |r| r.events),
         }
     };
     sink(&row(sim.as_ref(), 0, None))?;
@@ -462,6 +482,10 @@ pub struct RunStats {
     beam_last: (f64, u64),
     ball_first: (f64, u64),
     ball_last: (f64, u64),
+    /// Σ (tip deflection − static)² and samples over the steady window.
+    tip_square: (f64, u64),
+    /// Stop impacts in the steady window.
+    steady_impacts: u64,
     contact: ContactStats,
 }
 
@@ -489,6 +513,18 @@ struct ContactStats {
     /// Plastic landings whose rough impulse needed more friction than the coefficient.
     slipping_landings: u64,
     max_landing_mu: f64,
+    /// Separations and landings in the steady window.
+    steady_separations: u64,
+    steady_landings: u64,
+    /// Shortest flight counted by `long_flights` \[s\].
+    resolution: f64,
+    /// Time of the last row on the track before the current flight (None: on the track).
+    flight_start: Option<f64>,
+    /// Last row's time.
+    previous: Option<f64>,
+    /// Flights (from a take-off to the next row on the track, bounces included) of at least
+    /// `resolution` that started in the steady window.
+    steady_long_flights: u64,
 }
 
 impl RunStats {
@@ -521,8 +557,19 @@ impl RunStats {
             beam_last: (0.0, 0),
             ball_first: (0.0, 0),
             ball_last: (0.0, 0),
-            contact: ContactStats::default(),
+            tip_square: (0.0, 0),
+            steady_impacts: 0,
+            contact: ContactStats {
+                resolution: crate::scene::FLIGHT_RESOLUTION,
+                ..ContactStats::default()
+            },
         }
+    }
+
+    /// Counts flights of at least `resolution` \[s\] apart (`outputs.flight_resolution`).
+    pub fn with_flight_resolution(mut self, resolution: f64) -> Self {
+        self.contact.resolution = resolution;
+        self
     }
 
     /// Adds a row.
@@ -543,21 +590,32 @@ impl RunStats {
         if r.t >= self.steady_from - eps {
             self.tip_lo = self.tip_lo.min(r.tip_deflection);
             self.tip_hi = self.tip_hi.max(r.tip_deflection);
+            if d.is_finite() {
+                self.tip_square.0 += d * d;
+                self.tip_square.1 += 1;
+            }
+            self.steady_impacts += u64::from(r.events.impacts);
             if th.is_finite() {
                 self.ball_lo = self.ball_lo.min(th);
                 self.ball_hi = self.ball_hi.max(th);
             }
         }
-        self.impacts += u64::from(r.impact);
+        self.impacts += u64::from(r.events.impacts);
         self.max_iterations = self.max_iterations.max(r.iterations);
         if let (Some((_, stop, mu)), true) = (self.contact.ball, r.normal_force.is_finite()) {
             let c = &mut self.contact;
             let flying = u64::from(r.contact == 0.0);
             c.flying += flying;
-            c.separations += u64::from(r.separated);
+            c.separations += u64::from(r.events.separations);
+            let steady = r.t >= self.steady_from - eps;
+            if steady {
+                c.steady_separations += u64::from(r.events.separations);
+                c.steady_landings += u64::from(r.events.landings);
+            }
+            c.flight(r.t, r.contact == 0.0, self.steady_from - eps);
+            c.landings += u64::from(r.events.landings);
+            c.bounces += u64::from(r.events.bounces);
             if let Some((bounced, need)) = r.landing {
-                c.landings += 1;
-                c.bounces += u64::from(bounced);
                 if !bounced && need.is_finite() {
                     c.slipping_landings += u64::from(need > mu);
                     c.max_landing_mu = c.max_landing_mu.max(need);
@@ -605,6 +663,14 @@ impl RunStats {
     pub fn json(&self) -> serde_json::Value {
         let half = |lo: f64, hi: f64| if lo <= hi { 0.5 * (hi - lo) } else { f64::NAN };
         let mean = |a: (f64, u64)| if a.1 > 0 { a.0 / a.1 as f64 } else { f64::NAN };
+        let span = self.last_t - self.steady_from;
+        let rate = |n: u64| {
+            if span > 0.0 {
+                n as f64 / span
+            } else {
+                f64::NAN
+            }
+        };
         serde_json::json!({
             "duration": self.last_t,
             "steady_from": self.steady_from,
@@ -620,17 +686,42 @@ impl RunStats {
             "beam_energy_last": mean(self.beam_last),
             "ball_energy_first": mean(self.ball_first),
             "ball_energy_last": mean(self.ball_last),
-            "contact": self.contact.json(),
+            "tip_rms_steady": mean(self.tip_square).sqrt(),
+            "impact_rate_steady": rate(self.steady_impacts),
+            "contact": self.contact.json(self.last_t - self.steady_from),
         })
     }
 }
 
 impl ContactStats {
-    fn json(&self) -> serde_json::Value {
+    /// Follows the flights row by row: a flight runs from the last row on the track to the next
+    /// one (its bounces included), so its length is counted in whole steps.
+    fn flight(&mut self, t: f64, flying: bool, steady_from: f64) {
+        if flying {
+            if self.flight_start.is_none() {
+                // (The first row of a run is on the track.)
+                self.flight_start = Some(self.previous.unwrap_or(t));
+            }
+        } else if let Some(t0) = self.flight_start.take() {
+            if t - t0 >= self.resolution * (1.0 - 1e-9) && t0 >= steady_from {
+                self.steady_long_flights += 1;
+            }
+        }
+        self.previous = Some(t);
+    }
+
+    fn json(&self, span: f64) -> serde_json::Value {
         let Some((weight, _, mu)) = self.ball else {
             return serde_json::Value::Null;
         };
         let frac = |k: u64, n: u64| if n > 0 { k as f64 / n as f64 } else { f64::NAN };
+        let rate = |n: u64| {
+            if span > 0.0 {
+                n as f64 / span
+            } else {
+                f64::NAN
+            }
+        };
         serde_json::json!({
             "track_pulls_fraction": frac(self.pulled, self.samples),
             "track_pulls_fraction_steady": frac(self.steady_pulled, self.steady_samples),
@@ -647,6 +738,10 @@ impl ContactStats {
             "bounces": self.bounces,
             "landings_slipping": self.slipping_landings,
             "landing_friction_max": self.max_landing_mu,
+            "separation_rate_steady": rate(self.steady_separations),
+            "landing_rate_steady": rate(self.steady_landings),
+            "long_flight_rate_steady": rate(self.steady_long_flights),
+            "flight_resolution": self.resolution,
         })
     }
 }

@@ -165,6 +165,10 @@ pub struct BallSection {
     pub stick_speed: f64,
     /// Initial ball angle from the downward vertical \[deg\].
     pub initial_angle_deg: f64,
+    /// Initial orbit rate of the ball θ̇(0) \[rad/s\] (default 0: at rest relative to the
+    /// housing; the members of an ensemble, [`crate::ensemble`], get a small one).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub initial_rate: f64,
     /// Impact model.
     pub impact_model: ImpactSetting,
     /// Contact time of a stop impact \[s\] for the over-step impulse (0: the time step, the
@@ -207,6 +211,10 @@ pub struct DampingSection {
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CalibrationSection {
+    /// The element count the factors were fitted for: a run with another count (`--elements`)
+    /// leaves them out, with a warning (they hold for one mesh only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub elements: Option<usize>,
     /// Factor on E·I \[-\] (1: none).
     pub bending_stiffness: f64,
     /// Factor on E·a \[-\] (1: none).
@@ -224,6 +232,7 @@ impl Default for CalibrationSection {
 impl From<&Calibration<f64>> for CalibrationSection {
     fn from(c: &Calibration<f64>) -> Self {
         Self {
+            elements: None,
             bending_stiffness: c.bending_stiffness,
             axial_stiffness: c.axial_stiffness,
             mass_lumping: c.mass_lumping,
@@ -234,7 +243,7 @@ impl From<&Calibration<f64>> for CalibrationSection {
 impl CalibrationSection {
     /// No calibration (the section is then not written).
     pub fn is_identity(&self) -> bool {
-        *self == Self::default()
+        self.calibration().is_identity()
     }
 
     /// The core's calibration.
@@ -355,6 +364,22 @@ pub struct OutputsSection {
     pub transient: f64,
     /// Write every n-th step to the CSV.
     pub every: usize,
+    /// Shortest flight the contact statistics count \[s\]: a take-off into a flight at least
+    /// this long is a separation of the summary's separation rate (docs/model.md, "Contact
+    /// statistics": shorter flights are grazing, and their number depends on h and N).
+    #[serde(skip_serializing_if = "is_default_resolution")]
+    pub flight_resolution: f64,
+}
+
+/// The default [`OutputsSection::flight_resolution`] \[s\].
+pub const FLIGHT_RESOLUTION: f64 = 0.01;
+
+fn is_default_resolution(x: &f64) -> bool {
+    *x == FLIGHT_RESOLUTION
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// A plot of `run`.
@@ -874,6 +899,7 @@ impl Default for BallSection {
             restitution: p.restitution,
             stick_speed: p.stick_speed,
             initial_angle_deg: round_deg(p.initial_angle),
+            initial_rate: 0.0,
             impact_model: match p.impact_model {
                 ImpactModel::Instantaneous => ImpactSetting::Instantaneous,
                 ImpactModel::OverStep => ImpactSetting::OverStep,
@@ -947,6 +973,7 @@ impl Default for OutputsSection {
             plots: vec![Plot::Time, Plot::Fft, Plot::Phase, Plot::Energy],
             transient: 20.0,
             every: 1,
+            flight_resolution: FLIGHT_RESOLUTION,
         }
     }
 }
@@ -990,7 +1017,10 @@ pub struct Scene {
 }
 
 /// The built-in scene names.
-pub const BUILT_IN: [&str; 1] = ["paper"];
+pub const BUILT_IN: [&str; 2] = ["paper", "physics"];
+
+/// The physics scene (`scenes/physics.toml`, built in as `physics`).
+pub const PHYSICS_TOML: &str = include_str!("../../scenes/physics.toml");
 
 impl Scene {
     /// The paper's scene (Table 1, free ball, 3 elements, f64, 0.5 mm at 4.13 Hz, 60 s).
@@ -1001,7 +1031,13 @@ impl Scene {
         }
     }
 
-    /// `paper` (built in) or a path to a TOML file.
+    /// The physics scene (built in: `scenes/physics.toml`): Table 1's absorber with a steel
+    /// arm's damping, generalized-α, compliant stops, the calibrated embedded model.
+    pub fn physics() -> Result<Self> {
+        Self::from_toml(PHYSICS_TOML).context("built-in scene `physics`")
+    }
+
+    /// `paper` or `physics` (built in) or a path to a TOML file.
     pub fn load(spec: &str) -> Result<Self> {
         let scene = Self::read(spec)?;
         scene
@@ -1014,6 +1050,9 @@ impl Scene {
     pub fn read(spec: &str) -> Result<Self> {
         if spec == "paper" {
             return Ok(Self::paper());
+        }
+        if spec == "physics" {
+            return Self::physics();
         }
         let path = Path::new(spec);
         let text = std::fs::read_to_string(path).with_context(|| {
@@ -1075,6 +1114,23 @@ impl Scene {
             );
         }
         finite_positive(f.duration, "duration")?;
+        finite_positive(f.outputs.flight_resolution, "outputs.flight_resolution")?;
+        if !f.ball.initial_rate.is_finite() {
+            bail!(
+                "invalid value for `ball.initial_rate`: {} (must be finite)",
+                f.ball.initial_rate
+            );
+        }
+        if let Some(n) = f.calibration.elements {
+            if n != f.elements && !f.calibration.is_identity() {
+                bail!(
+                    "`calibration.elements` = {n}: the scene's calibration was fitted for {n} elements, \
+                     the scene has {} (refit it with `host-sim calibrate --elements {}`)",
+                    f.elements,
+                    f.elements
+                );
+            }
+        }
         let p = self.params()?;
         self.check_limits(&p)?;
         let e = &f.excitation;

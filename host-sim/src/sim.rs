@@ -50,6 +50,10 @@ pub trait Simulator: Send {
     }
     /// Short name of the solver ("core" or "full").
     fn solver_name(&self) -> &'static str;
+    /// At the start of a run (the ball rolling, the housing at rest): sets the ball's orbit
+    /// rate θ̇ to `rate` \[rad/s\] (its spin rate `φ̇ = −(ρ/r_b) θ̇`) and the consistent
+    /// acceleration. No effect without a free ball.
+    fn set_ball_rate(&mut self, rate: f64) -> Result<(), Error>;
 }
 
 /// Impacts are reported in the step report.

@@ -1,6 +1,7 @@
 //! Frequency-response sweep (paper Fig. 10): one run per excitation frequency, in parallel,
 //! steady-state amplitudes over the last part of each run.
 
+use crate::ensemble::Ensemble;
 use crate::excitation::Excitation;
 use crate::run::simulate;
 use crate::scene::{ExcitationType, Scene};
@@ -45,6 +46,19 @@ pub fn sweep(
     last: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<SweepPoint>> {
+    let members = sweep_members(scene, frequencies, last, Ensemble::single(), progress)?;
+    Ok(members.into_iter().flatten().collect())
+}
+
+/// The sweep of every member of an ensemble ([`crate::ensemble`]): per frequency, the K
+/// members' points (member 0 first), all runs in parallel.
+pub fn sweep_members(
+    scene: &Scene,
+    frequencies: &[f64],
+    last: f64,
+    e: Ensemble,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Vec<SweepPoint>>> {
     if scene.file.excitation.kind != ExcitationType::Harmonic {
         bail!("sweep needs a harmonic excitation (the scene has type = \"csv\")");
     }
@@ -53,65 +67,109 @@ pub fn sweep(
             bail!("invalid sweep frequency {f} (must be finite and positive)");
         }
     }
+    crate::ensemble::check_scene(scene, e)?;
+    // Build once up front so that a bad scene fails before the threads start.
+    crate::run::build_simulator(scene, 0.0)?;
+    let jobs: Vec<(f64, usize)> = frequencies
+        .iter()
+        .flat_map(|&f| (0..e.k).map(move |m| (f, m)))
+        .collect();
+    let points: Vec<SweepPoint> = jobs
+        .par_iter()
+        .map(|&(f, m)| {
+            point(
+                &crate::ensemble::member_scene(scene, e.seed, m),
+                f,
+                last,
+                progress,
+            )
+        })
+        .collect();
+    Ok(points.chunks(e.k).map(<[SweepPoint]>::to_vec).collect())
+}
+
+/// One run of the sweep at `f` \[Hz\].
+fn point(scene: &Scene, f: f64, last: f64, progress: &(dyn Fn(u64) + Sync)) -> SweepPoint {
     let amplitude = scene.file.excitation.amplitude_or_paper();
     let steps = scene.steps();
     let h = scene.file.integrator.step;
     let from = (scene.file.duration - last).max(0.0);
-    // Build once up front so that a bad scene fails before the threads start.
-    crate::run::build_simulator(scene, 0.0)?;
-    Ok(frequencies
-        .par_iter()
-        .map(|&f| {
-            let exc = Excitation::harmonic(amplitude, f, h);
-            let (mut lo, mut hi, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
-            let (mut blo, mut bhi, mut bmax) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
-            let (mut impacts, mut max_it) = (0u32, 0u32);
-            let mut flying = 0usize;
-            let mut last_k = 0usize;
-            let result = simulate(
-                scene,
-                &exc,
-                steps,
-                |r| {
-                    impacts += u32::from(r.impact);
-                    max_it = max_it.max(r.iterations);
-                    if r.t >= from - 1e-9 {
-                        lo = lo.min(r.tip_deflection);
-                        hi = hi.max(r.tip_deflection);
-                        sum += r.tip_deflection;
-                        n += 1;
-                        flying += usize::from(r.contact == 0.0);
-                        if r.ball_angle.is_finite() {
-                            let d = r.ball_angle.to_degrees();
-                            blo = blo.min(d);
-                            bhi = bhi.max(d);
-                            bmax = bmax.max(d.abs());
-                        }
-                    }
-                },
-                |k| {
-                    progress((k - last_k) as u64);
-                    last_k = k;
-                },
-            );
-            let half = |lo: f64, hi: f64| if lo <= hi { 0.5 * (hi - lo) } else { f64::NAN };
-            SweepPoint {
-                frequency: f,
-                tip_amplitude: half(lo, hi),
-                tip_mean: if n > 0 { sum / n as f64 } else { f64::NAN },
-                ball_max_deg: if blo <= bhi { bmax } else { f64::NAN },
-                ball_amplitude_deg: half(blo, bhi),
-                impacts,
-                flight_fraction: if n > 0 {
-                    flying as f64 / n as f64
-                } else {
-                    f64::NAN
-                },
-                max_iterations: max_it,
-                error: result.err().map(|e| format!("{e:#}")),
+    let exc = Excitation::harmonic(amplitude, f, h);
+    let (mut lo, mut hi, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
+    let (mut blo, mut bhi, mut bmax) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+    let (mut impacts, mut max_it) = (0u32, 0u32);
+    let mut flying = 0usize;
+    let mut last_k = 0usize;
+    let result = simulate(
+        scene,
+        &exc,
+        steps,
+        |r| {
+            impacts += r.events.impacts;
+            max_it = max_it.max(r.iterations);
+            if r.t >= from - 1e-9 {
+                lo = lo.min(r.tip_deflection);
+                hi = hi.max(r.tip_deflection);
+                sum += r.tip_deflection;
+                n += 1;
+                flying += usize::from(r.contact == 0.0);
+                if r.ball_angle.is_finite() {
+                    let d = r.ball_angle.to_degrees();
+                    blo = blo.min(d);
+                    bhi = bhi.max(d);
+                    bmax = bmax.max(d.abs());
+                }
             }
-        })
-        .collect())
+        },
+        |k| {
+            progress((k - last_k) as u64);
+            last_k = k;
+        },
+    );
+    let half = |lo: f64, hi: f64| if lo <= hi { 0.5 * (hi - lo) } else { f64::NAN };
+    SweepPoint {
+        frequency: f,
+        tip_amplitude: half(lo, hi),
+        tip_mean: if n > 0 { sum / n as f64 } else { f64::NAN },
+        ball_max_deg: if blo <= bhi { bmax } else { f64::NAN },
+        ball_amplitude_deg: half(blo, bhi),
+        impacts,
+        flight_fraction: if n > 0 {
+            flying as f64 / n as f64
+        } else {
+            f64::NAN
+        },
+        max_iterations: max_it,
+        error: result.err().map(|e| format!("{e:#}")),
+    }
+}
+
+/// An ensemble's point as JSON: [`crate::ensemble::aggregate`] of its members' points (the
+/// frequency kept), with `error` the first failed member's (then the point is failed) and
+/// `failed_members` their number.
+pub fn aggregate_point(members: &[SweepPoint]) -> serde_json::Value {
+    let values: Vec<serde_json::Value> = members
+        .iter()
+        .map(|p| serde_json::to_value(p).unwrap_or_default())
+        .collect();
+    let mut v = crate::ensemble::aggregate(&values, &["frequency"]);
+    let failed: Vec<(usize, &String)> = members
+        .iter()
+        .enumerate()
+        .filter_map(|(m, p)| p.error.as_ref().map(|e| (m, e)))
+        .collect();
+    if let Some(o) = v.as_object_mut() {
+        o.insert(
+            "error".into(),
+            failed.first().map_or(serde_json::Value::Null, |(m, e)| {
+                format!("member {m}: {e}").into()
+            }),
+        );
+        if members.len() > 1 {
+            o.insert("failed_members".into(), failed.len().into());
+        }
+    }
+    v
 }
 
 impl SweepPoint {
@@ -123,33 +181,62 @@ impl SweepPoint {
 
 /// CSV of a sweep. A failed point has status `failed`, no numbers and the error.
 pub fn csv(points: &[SweepPoint]) -> String {
-    let mut s = String::from(
-        "# host-sim sweep: steady-state amplitudes over the last part of each run\n\
+    let mut s = String::from(CSV_HEAD);
+    for p in points {
+        s.push_str(&csv_row(p));
+    }
+    s
+}
+
+/// CSV of an ensemble's sweep: one row per run, the member first (0: the scene itself), then
+/// the columns of [`csv`].
+pub fn csv_members(points: &[Vec<SweepPoint>], e: Ensemble) -> String {
+    let mut s = format!(
+        "# ensemble of {} runs per frequency, seed {} (member 0: the scene itself)\n",
+        e.k, e.seed
+    );
+    for line in CSV_HEAD.lines() {
+        if line.starts_with('#') {
+            s.push_str(line);
+        } else {
+            s.push_str("member,");
+            s.push_str(line);
+        }
+        s.push('\n');
+    }
+    for members in points {
+        for (m, p) in members.iter().enumerate() {
+            s.push_str(&format!("{m},{}", csv_row(p)));
+        }
+    }
+    s
+}
+
+/// The header of [`csv`].
+const CSV_HEAD: &str = "# host-sim sweep: steady-state amplitudes over the last part of each run\n\
          # frequency [Hz]; status: ok, or failed (then no numbers; error says why); tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
          # ball_max_deg: max |theta| [deg]; ball_amplitude_deg: half peak-to-peak theta [deg]; impacts;\n\
          # flight_fraction: share of the window with the ball in flight [-]; max_iterations; error\n\
-         frequency,status,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,flight_fraction,max_iterations,error\n",
-    );
-    for p in points {
-        if let Some(e) = &p.error {
-            s.push_str(&format!(
-                "{},failed,,,,,,,,{}\n",
-                p.frequency,
-                e.replace([',', '\n'], ";")
-            ));
-            continue;
-        }
-        s.push_str(&format!(
-            "{},ok,{:.6e},{:.6e},{:.4},{:.4},{},{:.4},{},\n",
+         frequency,status,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,flight_fraction,max_iterations,error\n";
+
+/// One point's CSV row (with its newline).
+fn csv_row(p: &SweepPoint) -> String {
+    if let Some(e) = &p.error {
+        return format!(
+            "{},failed,,,,,,,,{}\n",
             p.frequency,
-            p.tip_amplitude,
-            p.tip_mean,
-            p.ball_max_deg,
-            p.ball_amplitude_deg,
-            p.impacts,
-            p.flight_fraction,
-            p.max_iterations,
-        ));
+            e.replace([',', '\n'], ";")
+        );
     }
-    s
+    format!(
+        "{},ok,{:.6e},{:.6e},{:.4},{:.4},{},{:.4},{},\n",
+        p.frequency,
+        p.tip_amplitude,
+        p.tip_mean,
+        p.ball_max_deg,
+        p.ball_amplitude_deg,
+        p.impacts,
+        p.flight_fraction,
+        p.max_iterations,
+    )
 }

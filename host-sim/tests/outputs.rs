@@ -573,6 +573,7 @@ fn plot_buffers_stay_bounded_on_long_runs() {
         contact: f64::NAN,
         separated: false,
         landing: None,
+        events: Default::default(),
     };
     let n = 3_000_000usize;
     for k in 0..=n {

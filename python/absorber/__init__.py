@@ -75,6 +75,8 @@ def run(
     *,
     transient: Optional[float] = None,
     every: Optional[int] = None,
+    ensemble: int = 1,
+    seed: int = 1,
     **overrides: Any,
 ) -> Dict[str, Any]:
     """Runs a scene in time, as ``host-sim run`` does, and returns its time histories.
@@ -84,6 +86,10 @@ def run(
         transient: start of the steady-state window for the summary's amplitudes [s]
             (default: the scene's ``outputs.transient``, ``--transient``).
         every: keep every n-th step (default: the scene's ``outputs.every``, ``--every``).
+        ensemble: runs from seeded perturbations of the ball's initial state (``--ensemble``):
+            the time histories are member 0's (the scene itself), and every statistic of the
+            summary is a dict ``{"mean", "sd", "min", "max", "k"}`` over the members.
+        seed: seed of the perturbations (``--seed``).
         **overrides: ``solver``, ``kind``, ``elements``, ``precision``, ``frequency`` [Hz],
             ``amplitude`` [m], ``duration`` [s], ``step`` [s].
 
@@ -100,7 +106,9 @@ def run(
     Raises:
         AbsorberError: bad scene or option (``field`` names it), or a step that failed.
     """
-    names, columns, summary, notes = _absorber.run(_scene(scene), overrides, transient, every)
+    names, columns, summary, notes = _absorber.run(
+        _scene(scene), overrides, transient, every, ensemble, seed
+    )
     _warn(notes)
     out: Dict[str, Any] = dict(zip(names, columns))
     out["summary"] = json.loads(summary)
@@ -138,6 +146,8 @@ def sweep(
     *,
     last: float = 20.0,
     jobs: Optional[int] = None,
+    ensemble: int = 1,
+    seed: int = 1,
     **overrides: Any,
 ) -> Dict[str, Any]:
     """Frequency response, as ``host-sim sweep``: one run per excitation frequency, in parallel
@@ -149,6 +159,10 @@ def sweep(
         freqs: excitation frequencies [Hz] (default: the paper's 14, 3.50 … 4.70).
         last: steady-state window at the end of each run [s].
         jobs: worker threads.
+        ensemble: runs per frequency from seeded perturbations of the ball's initial state
+            (``--ensemble``): the arrays are then the means over the members, and
+            ``"spread"`` holds, per statistic, arrays ``"sd"``, ``"min"``, ``"max"``, ``"k"``.
+        seed: seed of the perturbations (``--seed``).
         **overrides: as for :func:`run` (``amplitude``, ``duration``, …).
 
     Returns:
@@ -161,8 +175,27 @@ def sweep(
         AbsorberError: bad scene, frequencies or window.
     """
     f = None if freqs is None else [float(x) for x in np.asarray(freqs, dtype=float).ravel()]
-    points = json.loads(_absorber.sweep(_scene(scene), overrides, f, last, jobs))
+    points = json.loads(_absorber.sweep(_scene(scene), overrides, f, last, jobs, ensemble, seed))
     keys = ("frequency", "tip_amplitude", "tip_mean", "ball_max_deg", "ball_amplitude_deg")
+    if ensemble > 1:
+        stats = keys[1:] + ("impacts", "flight_fraction", "max_iterations")
+
+        def field(p: Dict[str, Any], k: str, f: str) -> float:
+            return np.nan if p["error"] or p[k] is None else p[k][f]
+
+        spread: Dict[str, Any] = {
+            k: np.array([field(p, k, "mean") for p in points], dtype=float) for k in stats
+        }
+        spread["frequency"] = np.array([p["frequency"] for p in points], dtype=float)
+        spread["spread"] = {
+            k: {
+                f: np.array([field(p, k, f) for p in points], dtype=float)
+                for f in ("sd", "min", "max", "k")
+            }
+            for k in stats
+        }
+        spread["errors"] = [p["error"] for p in points]
+        return spread
     out: Dict[str, Any] = {
         k: np.array([np.nan if p["error"] or p[k] is None else p[k] for p in points], dtype=float)
         for k in keys

@@ -16,6 +16,8 @@ def run(
     overrides: Optional[Dict[str, Any]] = None,
     transient: Optional[float] = None,
     every: Optional[int] = None,
+    ensemble: int = 1,
+    seed: int = 1,
 ) -> Tuple[List[str], List[np.ndarray], str, List[str]]: ...
 def static_summary(scene: Any, overrides: Optional[Dict[str, Any]] = None) -> str: ...
 def modes(scene: Any, overrides: Optional[Dict[str, Any]] = None, count: int = 4) -> np.ndarray: ...
@@ -25,5 +27,7 @@ def sweep(
     freqs: Optional[List[float]] = None,
     last: float = 20.0,
     jobs: Optional[int] = None,
+    ensemble: int = 1,
+    seed: int = 1,
 ) -> str: ...
 def scene_toml(scene: Any, overrides: Optional[Dict[str, Any]] = None) -> str: ...

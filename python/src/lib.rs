@@ -218,16 +218,19 @@ fn warnings(s: &Scene) -> Vec<String> {
     s.warnings()
 }
 
-/// `run`: (column names, columns, summary JSON, warnings).
+/// `run`: (column names, columns, summary JSON, warnings); with `ensemble` > 1 the columns are
+/// member 0's and the summary's statistics are over the members (`run --ensemble`).
 #[pyfunction]
-#[pyo3(signature = (scene, overrides=None, transient=None, every=None))]
-#[allow(clippy::type_complexity)]
+#[pyo3(signature = (scene, overrides=None, transient=None, every=None, ensemble=1, seed=1))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
     scene: &Bound<'py, PyAny>,
     overrides: Option<&Bound<'py, PyDict>>,
     transient: Option<f64>,
     every: Option<usize>,
+    ensemble: usize,
+    seed: u64,
 ) -> PyResult<(
     Vec<&'static str>,
     Vec<Bound<'py, PyArray1<f64>>>,
@@ -236,8 +239,15 @@ fn run<'py>(
 )> {
     let s = scene_with(scene, overrides)?;
     let w = warnings(&s);
-    let (rows, summary) =
-        interruptible(py, || commands::run_in_memory(&s, transient, every))?.map_err(to_py)?;
+    let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
+    let (rows, summary) = interruptible(py, || {
+        if e.is_ensemble() {
+            commands::run_ensemble_in_memory(&s, transient, every, e)
+        } else {
+            commands::run_in_memory(&s, transient, every)
+        }
+    })?
+    .map_err(to_py)?;
     let names = host_sim::run::csv_columns();
     let mut columns = vec![Vec::with_capacity(rows.len()); names.len()];
     for r in &rows {
@@ -280,9 +290,11 @@ fn modes<'py>(
     Ok(PyArray1::from_vec(py, f))
 }
 
-/// `sweep`: the points as JSON (one object per frequency, `error` set on a failed one).
+/// `sweep`: the points as JSON (one object per frequency, `error` set on a failed one); with
+/// `ensemble` > 1 every number is `{"mean", "sd", "min", "max", "k"}` over the members.
 #[pyfunction]
-#[pyo3(signature = (scene, overrides=None, freqs=None, last=20.0, jobs=None))]
+#[pyo3(signature = (scene, overrides=None, freqs=None, last=20.0, jobs=None, ensemble=1, seed=1))]
+#[allow(clippy::too_many_arguments)]
 fn sweep(
     py: Python<'_>,
     scene: &Bound<'_, PyAny>,
@@ -290,13 +302,31 @@ fn sweep(
     freqs: Option<Vec<f64>>,
     last: f64,
     jobs: Option<usize>,
+    ensemble: usize,
+    seed: u64,
 ) -> PyResult<String> {
     let s = scene_with(scene, overrides)?;
-    let points = interruptible(py, || {
-        commands::sweep_in_memory(&s, freqs.as_deref(), last, jobs)
+    let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
+    let text = interruptible(py, || -> anyhow::Result<String> {
+        Ok(if e.is_ensemble() {
+            serde_json::to_string(&commands::sweep_ensemble_in_memory(
+                &s,
+                freqs.as_deref(),
+                last,
+                jobs,
+                e,
+            )?)?
+        } else {
+            serde_json::to_string(&commands::sweep_in_memory(
+                &s,
+                freqs.as_deref(),
+                last,
+                jobs,
+            )?)?
+        })
     })?
     .map_err(to_py)?;
-    serde_json::to_string(&points).map_err(|e| PyValueError::new_err(e.to_string()))
+    Ok(text)
 }
 
 /// The scene as TOML text (after the overrides): what a scene file for it would hold.

@@ -136,6 +136,7 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
         pole = Some((f1, zeta, f_model));
     }
     s.file.calibration = CalibrationSection::from(&params.calibration);
+    s.file.calibration.elements = Some(n);
     s.file.name = format!("{}-calibrated-n{n}", s.file.name);
     // A relative excitation file refers to the scene's directory: keep it reachable.
     if s.file.excitation.kind == ExcitationType::Csv {

@@ -2,13 +2,17 @@
 
 use super::{check_excitations, load, pool};
 use crate::cli::{FatigueArgs, Moment};
-use crate::fatigue::{comparison_csv, csv, fatigue_points, ratio, Comparison, FatiguePoint};
+use crate::ensemble::Ensemble;
+use crate::fatigue::{
+    comparison_csv, csv, csv_members, fatigue_members, fatigue_points, ratio, Comparison,
+    FatiguePoint,
+};
 use crate::output::{command_line, with_output, OutputDir, PointsFailed, Status};
 use crate::plot::{render, Panel, Series};
 use crate::sweep::PAPER_FREQUENCIES;
 use absorber_core::monitor::{MomentEstimate, MonitorConfig, ThresholdRule};
 use anyhow::Result;
-use serde_json::json;
+use serde_json::{json, Value};
 
 /// Palette index of the free ball and of the locked ball (the same on both panels).
 const FREE: usize = 0;
@@ -51,6 +55,13 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             );
         }
     }
+    let ens = a.ensemble.ensemble()?;
+    if ens.is_ensemble() && a.calibrate_against.is_some() {
+        anyhow::bail!(
+            "`--calibrate-against` runs one member only: use it without `--ensemble` (or with \
+             --ensemble 1)"
+        );
+    }
     let detail = a.category.detail();
     let config = MonitorConfig {
         moment: match a.moment {
@@ -70,35 +81,51 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
     let moment = format!("{:?}", a.moment).to_lowercase();
     eprintln!(
         "fatigue: {} runs of {} s on {} threads…",
-        2 * freqs.len() * amps.len(),
+        2 * freqs.len() * amps.len() * ens.k,
         s.file.duration,
         pool.current_num_threads()
     );
-    let ((points, csv_path, png, comparison), _files) = with_output(out, |out| {
-        let points = pool.install(|| {
-            fatigue_points(
+    let ((points, members, csv_path, png, comparison), _files) = with_output(out, |out| {
+        let members = pool.install(|| {
+            fatigue_members(
                 &params,
                 s.file.elements,
                 config,
                 &freqs,
                 &amps,
                 s.file.duration,
+                ens,
             )
         })?;
-        let csv_path = out.write("fatigue.csv", &csv(&points, detail.name(), &moment))?;
+        // Member 0 (the scene itself) of every point: the plain run's points.
+        let points: Vec<FatiguePoint> = members.iter().filter_map(|m| m.first().cloned()).collect();
+        let text = if ens.is_ensemble() {
+            csv_members(&members, ens, detail.name(), &moment)
+        } else {
+            csv(&points, detail.name(), &moment)
+        };
+        let csv_path = out.write("fatigue.csv", &text)?;
         let png = if a.no_plots {
             None
         } else {
             let title = format!(
-                "Root fatigue, AASHTO {} ({} s runs, {} elements, base ±{:.2} mm)",
+                "Root fatigue, AASHTO {} ({} s runs, {} elements, base ±{:.2} mm){}",
                 detail.name(),
                 s.file.duration,
                 s.file.elements,
-                amps.first().copied().unwrap_or(0.0) * 1e3
+                amps.first().copied().unwrap_or(0.0) * 1e3,
+                if ens.is_ensemble() {
+                    format!("; member 0 of {}", ens.k)
+                } else {
+                    String::new()
+                }
             );
             Some(out.write_with("fatigue.png", |p| plot(p, &title, &points, &amps))?)
         };
-        let mut failed = points.iter().filter(|p| p.failed()).count();
+        let mut failed = members
+            .iter()
+            .filter(|m| m.iter().any(FatiguePoint::failed))
+            .count();
         let mut comparison = None;
         if let Some(m) = a.calibrate_against {
             let n = s.file.elements;
@@ -137,7 +164,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
         }
         let status = Status::of_points(failed);
         let extra = json!({ "points": points.len(), "failed": failed });
-        Ok(((points, csv_path, png, comparison), status, extra))
+        Ok(((points, members, csv_path, png, comparison), status, extra))
     })?;
     let wall = t0.elapsed().as_secs_f64();
     println!(
@@ -146,6 +173,9 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
         s.file.elements,
         s.file.duration
     );
+    if ens.is_ensemble() {
+        return ensemble_table(&members, ens, &csv_path, png.as_deref(), wall);
+    }
     println!(
         "  f [Hz]  A [mm]   D/h free     D/h locked   S_eq free/locked [MPa]   impacts  in flight"
     );
@@ -223,6 +253,73 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
         return Err(PointsFailed(format!(
             "{failed} of {} fatigue points failed (marked FAILED in the table, {} and the plot)",
             points.len(),
+            csv_path.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// The table of `fatigue --ensemble K`: per point, each figure over the members as
+/// `mean ± sd (min–max)`; a point with a failed member is FAILED.
+fn ensemble_table(
+    members: &[Vec<FatiguePoint>],
+    ens: Ensemble,
+    csv_path: &std::path::Path,
+    png: Option<&std::path::Path>,
+    wall: f64,
+) -> Result<()> {
+    use crate::ensemble::{aggregate, count_text, text};
+    println!("{}", super::run::ensemble_line(ens));
+    println!("  f [Hz]  A [mm]   D/h free                                   D/h locked                                 impacts (free)   in flight [%]");
+    let mut failed = 0;
+    for m in members {
+        let Some(p0) = m.first() else { continue };
+        if let Some((k, p)) = m.iter().enumerate().find(|(_, p)| p.failed()) {
+            failed += 1;
+            let why = [&p.free.error, &p.locked.error]
+                .iter()
+                .filter_map(|e| e.as_deref())
+                .collect::<Vec<_>>()
+                .join("; ");
+            println!(
+                "  {:6.3}  {:6.3}   FAILED: member {k}: {why}",
+                p0.frequency,
+                p0.amplitude * 1e3
+            );
+            continue;
+        }
+        let values: Vec<Value> = m
+            .iter()
+            .map(|p| serde_json::to_value(p).unwrap_or_default())
+            .collect();
+        let g = aggregate(&values, &["frequency", "amplitude"]);
+        let sci = |v: &Value| match crate::ensemble::spread_of(v) {
+            Some(sp) => format!(
+                "{:.3e} ± {:.1e} ({:.3e}–{:.3e})",
+                sp.mean, sp.sd, sp.min, sp.max
+            ),
+            None => format!("{:.3e}", crate::ensemble::value(v)),
+        };
+        println!(
+            "  {:6.3}  {:6.3}   {:41}  {:41}  {:15}  {}",
+            p0.frequency,
+            p0.amplitude * 1e3,
+            sci(&g["free"]["damage_rate"]),
+            sci(&g["locked"]["damage_rate"]),
+            count_text(&g["free"]["impacts"]),
+            text(&g["free"]["flight_fraction"], 100.0, 1),
+        );
+    }
+    println!("wrote {}", csv_path.display());
+    if let Some(p) = png {
+        println!("wrote {} (member 0)", p.display());
+    }
+    println!("wall time {wall:.2} s ({} runs)", 2 * members.len() * ens.k);
+    if failed > 0 {
+        return Err(PointsFailed(format!(
+            "{failed} of {} fatigue points had a failed run (marked FAILED in the table and {})",
+            members.len(),
             csv_path.display()
         ))
         .into());

@@ -13,8 +13,8 @@ mod sweep;
 
 pub use fmu::FmuArgs;
 pub use info::{lowest_frequencies, static_summary};
-pub use run::run_in_memory;
-pub use sweep::sweep_in_memory;
+pub use run::{run_ensemble_in_memory, run_in_memory, step_damping_line, summary_in_memory};
+pub use sweep::{sweep_ensemble_in_memory, sweep_in_memory};
 
 use crate::cli::{Cli, Command, PaperArgs, SceneArgs};
 use crate::scene::{ExcitationType, Precision, Scene};
@@ -25,13 +25,7 @@ use std::path::Path;
 /// Runs the parsed command line.
 pub fn dispatch(cli: Cli) -> Result<()> {
     match cli.command.unwrap_or(Command::Paper(PaperArgs {
-        scene: SceneArgs {
-            model: crate::cli::ModelArgs {
-                scene: "paper".into(),
-                ..Default::default()
-            },
-            ..Default::default()
-        },
+        scene: SceneArgs::default(),
         json: false,
     })) {
         Command::Paper(a) => run::paper(&a),
@@ -43,6 +37,7 @@ pub fn dispatch(cli: Cli) -> Result<()> {
         Command::Stability(a) => docs::stability(&a),
         Command::Fatigue(a) => fatigue::run(&a),
         Command::Accuracy(a) => docs::accuracy(&a),
+        Command::Chaos(a) => crate::chaos::run(&a),
         Command::Calibrate(a) => calibrate::calibrate(&a),
         Command::Identify(a) => calibrate::identify(&a),
         Command::Validation(a) => docs::validation(&a),

@@ -1,13 +1,15 @@
 //! `paper` and `run`: one scene in time, streamed (fixed memory whatever the duration).
 
-use super::{describe, load, progress_bar};
+use super::{describe, load, pool, progress_bar};
 use crate::cli::{PaperArgs, RunArgs};
+use crate::ensemble::Ensemble;
 use crate::excitation::Excitation;
 use crate::figures::{run_plots, PlotData};
 use crate::output::{command_line, with_output, OutputDir, Status};
 use crate::run::{scene_excitation, simulate_with, RunStats, CSV_HEADER};
 use crate::scene::{Kind, Scene};
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
+use indicatif::ProgressBar;
 use serde_json::{json, Value};
 use std::time::Instant;
 
@@ -65,74 +67,107 @@ fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
 /// Fewest steps a steady-state window may hold.
 pub const MIN_STEADY_STEPS: usize = 10;
 
+/// The number under `k` (a [`crate::ensemble::Spread`]'s mean in an ensemble's summary).
 fn num(v: &Value, k: &str) -> f64 {
-    v.get(k).and_then(|x| x.as_f64()).unwrap_or(f64::NAN)
+    v.get(k).map_or(f64::NAN, crate::ensemble::value)
 }
 
-/// The summary lines of `paper` and `run`.
+/// The statistic under `k` scaled by `scale` with `prec` decimals (`mean ± sd (min–max)` in
+/// an ensemble's summary).
+fn stat(v: &Value, k: &str, scale: f64, prec: usize) -> String {
+    crate::ensemble::text(v.get(k).unwrap_or(&Value::Null), scale, prec)
+}
+
+/// The count under `k` (`mean ± sd (min–max)` in an ensemble's summary).
+fn count(v: &Value, k: &str) -> String {
+    crate::ensemble::count_text(v.get(k).unwrap_or(&Value::Null))
+}
+
+/// The keys of a run's summary that are settings shared by the members of an ensemble, not
+/// statistics.
+pub const SHARED_KEYS: [&str; 5] = [
+    "duration",
+    "steady_from",
+    "energy_window",
+    "friction",
+    "flight_resolution",
+];
+
+/// The summary lines of `paper` and `run` (an ensemble's statistics as `mean ± sd (min–max)`).
 pub fn summary_lines(s: &Value) -> Vec<String> {
     let w = num(s, "energy_window");
     let mut lines = vec![
         format!(
-            "static tip deflection      {:.3} mm",
-            1e3 * num(s, "static_tip_deflection")
+            "static tip deflection      {} mm",
+            stat(s, "static_tip_deflection", 1e3, 3)
         ),
         format!(
-            "tip amplitude              max {:.3} mm; steady (t ≥ {} s, half peak-to-peak) {:.3} mm",
-            1e3 * num(s, "tip_amplitude_max"),
+            "tip amplitude              max {} mm; steady (t ≥ {} s, half peak-to-peak) {} mm",
+            stat(s, "tip_amplitude_max", 1e3, 3),
             num(s, "steady_from"),
-            1e3 * num(s, "tip_amplitude_steady")
+            stat(s, "tip_amplitude_steady", 1e3, 3)
         ),
         format!(
-            "ball angle θ               max {:.1}°; steady {:.1}°; {} stop impacts",
-            num(s, "ball_angle_max_deg"),
-            num(s, "ball_angle_steady_deg"),
-            s.get("impacts").and_then(|x| x.as_u64()).unwrap_or(0)
+            "ball angle θ               max {}°; steady {}°; {} stop impacts",
+            stat(s, "ball_angle_max_deg", 1.0, 1),
+            stat(s, "ball_angle_steady_deg", 1.0, 1),
+            count(s, "impacts")
         ),
         format!(
-            "mean energy [mJ]           beam {:.3} (first {w:.1} s) → {:.3} (last {w:.1} s); ball {:.3} → {:.3}",
-            1e3 * num(s, "beam_energy_first"),
-            1e3 * num(s, "beam_energy_last"),
-            1e3 * num(s, "ball_energy_first"),
-            1e3 * num(s, "ball_energy_last")
+            "mean energy [mJ]           beam {} (first {w:.1} s) → {} (last {w:.1} s); ball {} → {}",
+            stat(s, "beam_energy_first", 1e3, 3),
+            stat(s, "beam_energy_last", 1e3, 3),
+            stat(s, "ball_energy_first", 1e3, 3),
+            stat(s, "ball_energy_last", 1e3, 3)
         ),
     ];
     if let Some(c) = s.get("contact").filter(|c| c.is_object()) {
-        let count = |k: &str| c.get(k).and_then(|x| x.as_u64()).unwrap_or(0);
-        if count("separations") > 0 {
+        let separations = num(c, "separations");
+        if separations > 0.0 {
             lines.push(format!(
-                "ball in flight             {:.1} % of the time ({:.1} % for t ≥ {} s): {} separations, {} landings ({} bounces)",
-                100.0 * num(c, "flight_fraction"),
-                100.0 * num(c, "flight_fraction_steady"),
+                "ball in flight             {} % of the time ({} % for t ≥ {} s): {} separations, {} landings ({} bounces; counts of short hops depend on h: docs/chaos.md)",
+                stat(c, "flight_fraction", 100.0, 1),
+                stat(c, "flight_fraction_steady", 100.0, 1),
                 num(s, "steady_from"),
-                count("separations"),
-                count("landings"),
-                count("bounces"),
+                count(c, "separations"),
+                count(c, "landings"),
+                count(c, "bounces"),
             ));
+            let rolling = match (
+                c.get("landings").and_then(Value::as_u64),
+                c.get("bounces").and_then(Value::as_u64),
+            ) {
+                (Some(l), Some(b)) => (l - b.min(l)).to_string(),
+                _ => format!("{:.1}", num(c, "landings") - num(c, "bounces")),
+            };
             lines.push(format!(
-                "landing on the track       {} of {} rolling landings need more friction than μ = {} (peak |P_t|/P_n {:.2})",
-                count("landings_slipping"),
-                count("landings") - count("bounces"),
+                "landing on the track       {} of {rolling} rolling landings need more friction than μ = {} (peak |P_t|/P_n {})",
+                count(c, "landings_slipping"),
                 num(c, "friction"),
-                num(c, "landing_friction_max"),
+                stat(c, "landing_friction_max", 1.0, 2),
             ));
         }
-        if count("separations") == 0 {
+        if separations == 0.0 || separations.is_nan() {
             lines.push(format!(
-            "track contact              N < 0 (the track pulls: a real ball would leave it) {:.1} % of the time ({:.1} % for t ≥ {} s), min N = {:.2} m_b g",
-            100.0 * num(c, "track_pulls_fraction"),
-            100.0 * num(c, "track_pulls_fraction_steady"),
+            "track contact              N < 0 (the track pulls: a real ball would leave it) {} % of the time ({} % for t ≥ {} s), min N = {} m_b g",
+            stat(c, "track_pulls_fraction", 100.0, 1),
+            stat(c, "track_pulls_fraction_steady", 100.0, 1),
             num(s, "steady_from"),
-            num(c, "normal_force_min_over_weight"),
+            stat(c, "normal_force_min_over_weight", 1.0, 2),
         ));
         }
+        let peak = match crate::ensemble::spread_of(
+            c.get("required_friction_max").unwrap_or(&Value::Null),
+        ) {
+            Some(p) => format!("{:.3e} ({:.3e}–{:.3e})", p.mean, p.min, p.max),
+            None => format!("{:.3e}", num(c, "required_friction_max")),
+        };
         lines.push(format!(
-            "rolling without slip       needs more friction than μ = {} {:.1} % of the time ({:.1} % for t ≥ {} s; peak |F_t|/N {:.3e})",
+            "rolling without slip       needs more friction than μ = {} {} % of the time ({} % for t ≥ {} s; peak |F_t|/N {peak})",
             num(c, "friction"),
-            100.0 * num(c, "slip_fraction"),
-            100.0 * num(c, "slip_fraction_steady"),
+            stat(c, "slip_fraction", 100.0, 1),
+            stat(c, "slip_fraction_steady", 100.0, 1),
             num(s, "steady_from"),
-            num(c, "required_friction_max")
         ));
     }
     lines
@@ -144,6 +179,20 @@ fn stream(
     exc: &Excitation,
     steady_from: f64,
     what: &str,
+    each: impl FnMut(&crate::run::Row) -> Result<()>,
+) -> Result<Value> {
+    let pb = progress_bar(s.steps() as u64, what);
+    let r = stream_with(s, exc, steady_from, &pb, each);
+    pb.finish_and_clear();
+    r
+}
+
+/// [`stream`] advancing a progress bar that may be shared (by the members of an ensemble).
+fn stream_with(
+    s: &Scene,
+    exc: &Excitation,
+    steady_from: f64,
+    pb: &ProgressBar,
     mut each: impl FnMut(&crate::run::Row) -> Result<()>,
 ) -> Result<Value> {
     let steps = s.steps();
@@ -153,10 +202,11 @@ fn stream(
         p.ball.stop_angle,
         s.file.ball.friction,
     ));
-    let mut stats =
-        RunStats::new(steps as f64 * s.file.integrator.step, steady_from).with_ball(ball);
-    let pb = progress_bar(steps as u64, what);
-    let r = simulate_with(
+    let mut stats = RunStats::new(steps as f64 * s.file.integrator.step, steady_from)
+        .with_ball(ball)
+        .with_flight_resolution(s.file.outputs.flight_resolution);
+    let mut done = 0usize;
+    simulate_with(
         s,
         exc,
         steps,
@@ -164,11 +214,48 @@ fn stream(
             stats.push(row);
             each(row)
         },
-        |k| pb.set_position(k as u64),
-    );
-    pb.finish_and_clear();
-    r?;
+        |k| {
+            pb.inc(k.saturating_sub(done) as u64);
+            done = k;
+        },
+    )?;
     Ok(stats.json())
+}
+
+/// The summaries of members `1..K` of an ensemble (member 0, the scene itself, is run by the
+/// caller), in parallel, each failure naming its member.
+fn other_members(
+    s: &Scene,
+    exc: &Excitation,
+    steady_from: f64,
+    e: Ensemble,
+    pb: &ProgressBar,
+) -> Result<Vec<Value>> {
+    use rayon::prelude::*;
+    (1..e.k)
+        .into_par_iter()
+        .map(|m| {
+            let member = crate::ensemble::member_scene(s, e.seed, m);
+            stream_with(&member, exc, steady_from, pb, |_| Ok(())).map_err(|err| {
+                let (a, r) = crate::ensemble::perturbation(e.seed, m);
+                anyhow!(
+                    "ensemble member {m} (initial angle {:+.4}°, rate {r:+.5} rad/s): {err:#}",
+                    a
+                )
+            })
+        })
+        .collect()
+}
+
+/// Member 0's summary and the others', aggregated ([`crate::ensemble::aggregate`]); the plain
+/// summary for one member.
+fn ensemble_summary(first: Value, others: Vec<Value>) -> Value {
+    if others.is_empty() {
+        return first;
+    }
+    let mut all = vec![first];
+    all.extend(others);
+    crate::ensemble::aggregate(&all, &SHARED_KEYS)
 }
 
 pub fn paper(a: &PaperArgs) -> Result<()> {
@@ -205,6 +292,9 @@ pub fn paper(a: &PaperArgs) -> Result<()> {
 /// What `paper` prints on stdout (the README shows it; a test keeps them equal).
 pub fn paper_lines(s: &Scene, freqs: &[f64], free: &Value, locked: Option<&Value>) -> Vec<String> {
     let mut out = vec![describe(s)];
+    if let Some(line) = step_damping_line(s) {
+        out.push(line);
+    }
     let f: Vec<String> = freqs.iter().take(3).map(|x| format!("{x:.3}")).collect();
     out.push(format!("lowest frequencies         {} Hz", f.join(", ")));
     out.extend(summary_lines(free));
@@ -216,6 +306,25 @@ pub fn paper_lines(s: &Scene, freqs: &[f64], free: &Value, locked: Option<&Value
         ));
     }
     out
+}
+
+/// For Newmark with γ > ½ (the paper's integrator): one line saying that its damping is
+/// numerical and depends on h. For small ωh the scheme damps a mode of angular frequency ω by
+/// ξ ≈ (γ − ½) ω h / 2 of critical (Hughes, *The Finite Element Method*, §9.3); it is given at
+/// the excitation frequency, where the response is.
+pub fn step_damping_line(s: &Scene) -> Option<String> {
+    let i = &s.file.integrator;
+    if i.rho_inf.is_some() || i.gamma <= 0.5 {
+        return None;
+    }
+    let f = s.file.excitation.frequency_or_paper();
+    let xi = (i.gamma - 0.5) * std::f64::consts::TAU * f * i.step / 2.0;
+    Some(format!(
+        "integrator damping         numerical, depends on h: Newmark γ = {} damps {:.2} % of critical at {f} Hz with h = {} s (∝ h; `--scene physics`: generalized-α and a steel arm's damping)",
+        i.gamma,
+        100.0 * xi,
+        i.step
+    ))
 }
 
 /// What `run` checks before it computes: the excitation (a CSV record is read here), the
@@ -271,11 +380,36 @@ pub fn run_in_memory(
     Ok((rows, sum))
 }
 
+/// The summary of `run --json` for `s`, without rows or files (the studies' runs).
+pub fn summary_in_memory(s: &Scene, transient: Option<f64>) -> Result<Value> {
+    let (exc, from, _) = plan(s, transient, None)?;
+    stream_with(s, &exc, from, &ProgressBar::hidden(), |_| Ok(()))
+}
+
+/// An ensemble's summary in memory (the Python package's `run(..., ensemble=K)`): the same
+/// checks as `run`, member 0's rows, and the statistics over the K members.
+pub fn run_ensemble_in_memory(
+    s: &Scene,
+    transient: Option<f64>,
+    every: Option<usize>,
+    e: Ensemble,
+) -> Result<(Vec<crate::run::Row>, Value)> {
+    crate::ensemble::check_scene(s, e)?;
+    let (rows, first) = run_in_memory(s, transient, every)?;
+    let (exc, from, _) = plan(s, transient, every)?;
+    let pb = ProgressBar::hidden();
+    let others = pool(None, e.k)?.install(|| other_members(s, &exc, from, e, &pb))?;
+    Ok((rows, ensemble_summary(first, others)))
+}
+
 pub fn run(a: &RunArgs) -> Result<()> {
     let t0 = Instant::now();
     let s = load(&a.scene)?;
     let f = &s.file;
+    let ens = a.ensemble.ensemble()?;
+    crate::ensemble::check_scene(&s, ens)?;
     let (exc, from, every) = plan(&s, a.transient, a.every)?;
+    let workers = pool(None, ens.k)?;
     let plots = if a.no_plots {
         Vec::new()
     } else {
@@ -295,18 +429,35 @@ pub fn run(a: &RunArgs) -> Result<()> {
         csv.line(CSV_HEADER)?;
         let mut data = (!plots.is_empty()).then(|| PlotData::new(from));
         let mut k = 0u64;
-        let sum = stream(&s, &exc, from, "run", |r| {
-            if let Some(d) = data.as_mut() {
-                d.push(r);
-            }
-            let write = k.is_multiple_of(every as u64);
-            k += 1;
-            if write {
-                csv.line(&r.csv())
-            } else {
-                Ok(())
-            }
-        })?;
+        let what = if ens.is_ensemble() {
+            format!("run (ensemble of {})", ens.k)
+        } else {
+            "run".to_string()
+        };
+        let pb = progress_bar((ens.k * s.steps()) as u64, &what);
+        // Member 0 (the scene itself) writes the CSV and the plots; the others, in parallel
+        // beside it, give their summaries.
+        let (first, others) = workers.install(|| {
+            rayon::join(
+                || {
+                    stream_with(&s, &exc, from, &pb, |r| {
+                        if let Some(d) = data.as_mut() {
+                            d.push(r);
+                        }
+                        let write = k.is_multiple_of(every as u64);
+                        k += 1;
+                        if write {
+                            csv.line(&r.csv())
+                        } else {
+                            Ok(())
+                        }
+                    })
+                },
+                || other_members(&s, &exc, from, ens, &pb),
+            )
+        });
+        pb.finish_and_clear();
+        let sum = ensemble_summary(first?, others?);
         let csv = out.finish(csv)?;
         let pngs = match &data {
             Some(d) => run_plots(out, &stem, &title, d, &plots)?,
@@ -316,14 +467,21 @@ pub fn run(a: &RunArgs) -> Result<()> {
     })?;
     let wall = t0.elapsed().as_secs_f64();
     if a.json {
-        println!(
-            "{}",
-            json!({ "scene": f.name, "csv": csv, "plots": pngs, "summary": sum, "wall_time": wall })
-        );
+        let mut out = json!({ "scene": f.name, "csv": csv, "plots": pngs, "summary": sum, "wall_time": wall });
+        if ens.is_ensemble() {
+            out["ensemble"] = ens.json();
+        }
+        println!("{out}");
     } else {
         println!("{title}");
+        if ens.is_ensemble() {
+            println!("{}", ensemble_line(ens));
+        }
         for line in summary_lines(&sum) {
             println!("{line}");
+        }
+        if ens.is_ensemble() {
+            println!("(CSV and plots: member 0, the scene itself)");
         }
         println!("wrote {}", csv.display());
         for p in &pngs {
@@ -336,4 +494,15 @@ pub fn run(a: &RunArgs) -> Result<()> {
         println!("wall time {wall:.2} s");
     }
     Ok(())
+}
+
+/// The line that introduces an ensemble's statistics.
+pub fn ensemble_line(e: Ensemble) -> String {
+    format!(
+        "ensemble of {} runs (seed {}; initial ball angle ± {}°, rate ± {} rad/s): mean ± sd (min–max)",
+        e.k,
+        e.seed,
+        crate::ensemble::ANGLE_SPREAD_DEG,
+        crate::ensemble::RATE_SPREAD
+    )
 }

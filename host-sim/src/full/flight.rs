@@ -494,7 +494,9 @@ impl FullSolver {
             work.projection = work.projection.max((rel.r - rho).abs());
         }
         let normal_speed = n[0] * rel.rate[0] + n[1] * rel.rate[1];
-        if !(normal_speed > absorber_core::flight::GRAZING) {
+        if normal_speed.partial_cmp(&absorber_core::flight::GRAZING)
+            != Some(std::cmp::Ordering::Greater)
+        {
             return Ok(()); // grazing: no impulse, the ball flies on
         }
         let mut landing = Landing {
@@ -528,6 +530,7 @@ impl FullSolver {
         }
         report.landing = Some(landing);
         report.events.landings += 1;
+        report.events.bounces += u32::from(landing.bounced);
         if s.contact == Contact::InFlight {
             self.after_impulse(s, &prior);
             Ok(())

@@ -1763,6 +1763,25 @@ impl FullSolver {
         Ok(())
     }
 
+    /// At the start of a run: the ball's orbit rate θ̇ set to `rate` \[rad/s\] (the spin rate
+    /// `φ̇ = −(ρ/r_b) θ̇` at a housing at rest, by `c₅`) with the consistent acceleration; no
+    /// effect without a rolling free ball (the core's `set_configuration` route).
+    pub fn set_ball_rate(&mut self, rate: f64) -> Result<(), Error> {
+        if self.mode(self.state.contact) != Mode::Free {
+            return Ok(());
+        }
+        let mut s = self.state.clone();
+        s.v[self.zloc(PHI)] = -rate * self.bodies.rho / self.bodies.rb;
+        let mode = Mode::Free;
+        let qi = self.gather_ind(&s.q, mode);
+        let vi = self.gather_ind(&s.v, mode);
+        let ai = self.gather_ind(&s.a, mode);
+        s = self.complete(&qi, &vi, &ai, mode, &s, s.time, s.base_accel, s.contact)?;
+        let acc = self.consistent_acceleration(&s)?;
+        self.state = self.with_accel(&s, &acc.x)?;
+        Ok(())
+    }
+
     fn with_accel(&self, s: &FullState, ai: &[f64]) -> Result<FullState, Error> {
         let mode = self.mode(s.contact);
         let qi = self.gather_ind(&s.q, mode);
@@ -2508,6 +2527,10 @@ impl Simulator for FullSolver {
 
     fn static_tip_deflection(&self) -> f64 {
         self.equilibrium.q[4 * self.n + 1]
+    }
+
+    fn set_ball_rate(&mut self, rate: f64) -> Result<(), Error> {
+        FullSolver::set_ball_rate(self, rate)
     }
 
     fn solver_name(&self) -> &'static str {
