@@ -73,16 +73,25 @@ fn full_and_core_momenta_agree() {
         y + p.tip.mass * s.q[4 * (n + 1) + 1] + p.ball.mass * s.q[4 * (n + 1) + 5]
     };
     let mut fd_worst = 0.0f64;
+    let mut event_steps = 0;
     let (mut vdiff, mut vmax) = (0.0f64, 0.0f64);
     let h = p.integrator.step;
     for k in 1..200 {
         let a = -3.0 * (k as f64 * 0.08).sin();
         let (y0, p0) = (y_of(&full), full.vertical_momentum());
-        core.step(a).unwrap();
+        let report = core.step(a).unwrap();
         full.solver.step(a).unwrap();
-        // Trapezoid: Δ(Σ m y) ≈ h (p₀ + p₁)/2.
-        fd_worst =
-            fd_worst.max((y_of(&full) - y0 - 0.5 * h * (p0 + full.vertical_momentum())).abs() / h);
+        // Trapezoid: Δ(Σ m y) ≈ h (p₀ + p₁)/2 on a smooth step (Newmark: the difference is
+        // h²(β − γ/2)Δ(Σ m a)). A step that holds an event (a landing, a stop hit) carries its
+        // impulse's jump of the housing's momentum somewhere inside the step, which the
+        // endpoints' trapezoid cannot see: such steps are counted, not compared.
+        let e = report.events;
+        if e.separations + e.landings + e.impacts > 0 || report.impact.is_some() {
+            event_steps += 1;
+        } else {
+            fd_worst = fd_worst
+                .max((y_of(&full) - y0 - 0.5 * h * (p0 + full.vertical_momentum())).abs() / h);
+        }
         worst = worst.max((core.vertical_momentum() - full.vertical_momentum()).abs());
         use host_sim::sim::Simulator;
         vdiff = vdiff.max((core.tip_velocity() - full.solver.observe().tip_velocity).abs());
@@ -91,8 +100,11 @@ fn full_and_core_momenta_agree() {
     }
     eprintln!("tip velocity core vs full: {vdiff:.3e} of {vmax:.3e}");
     eprintln!(
-        "core vs full p_y: {worst:.3e} of {largest:.3e}; full p_y vs d(Σ m y)/dt: {fd_worst:.3e}"
+        "core vs full p_y: {worst:.3e} of {largest:.3e}; full p_y vs d(Σ m y)/dt: {fd_worst:.3e} \
+         ({event_steps} event steps not compared)"
     );
+    // The run holds events (the ball lands within these 0.6 s), and they are few.
+    assert!((1..20).contains(&event_steps), "{event_steps}");
     // The solvers' motions agree to rounding, and the full solver's p_y is the rate of its
     // Σ m y (to Newmark's O(h) difference from the trapezoid).
     assert!(vdiff < 1e-9 * vmax, "{vdiff:e} of {vmax:e}");
