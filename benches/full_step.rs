@@ -4,7 +4,7 @@
 //! (no stop events), paper integrator (h = 3 ms), 0.5 mm at 3.70 Hz, after 1 s of warm-up. The
 //! cost slope is `log(t_512 / t_8) / log(64)` (docs/full-solver.md). The group
 //! `full_step/locked-sparse-lu` times the same step with the kept sparse LU (faer), the
-//! reference the block LU replaced (issue 17), at N = 16 and 64.
+//! reference the block LU replaced, at N = 16 and 64.
 
 use absorber_core::Params;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};

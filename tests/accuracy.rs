@@ -1,5 +1,5 @@
 //! Error budgets of the default embedded configuration (N = 3, h = 3 ms, `f32`, full Newton to
-//! 1e-5) against the full solver on a converged mesh (`docs/accuracy.md`, issue 4).
+//! 1e-5) against the full solver on a converged mesh (`docs/accuracy.md`).
 //!
 //! The test reference is the report's reference made cheaper to fit CI: full solver, N = 8,
 //! `f64`, Newton to 1e-10, damping-matched integrator, but h = 1 ms instead of 0.5 ms (5 s of

@@ -1,4 +1,4 @@
-//! Calibration of the reduced beam (issue 12): a calibrated 3-element core model against the
+//! Calibration of the reduced beam: a calibrated 3-element core model against the
 //! converged full solver, the full solver with the same calibration against the core, the
 //! identification of a pole from a synthetic noisy decay made by the full solver, and the
 //! uncalibrated model bit for bit as before.
@@ -221,7 +221,7 @@ fn run_hashes(steps: usize) -> (u64, u64) {
 }
 
 /// Without a calibration the model is bit for bit the one before the calibration existed: the
-/// hashes were computed with the same function on the core of commit e49c4c1 (before issue 12)
+/// hashes were computed with the same function on the core of commit e49c4c1 (before the calibration)
 /// and agreed with this one's. The locked ball's still does. The free ball's was re-pinned
 /// (from 0xf8ea_9802_3f94_8800) when a stop impact stopped restarting the accelerations from
 /// the consistent acceleration (they now go on from before the impulse, docs/model.md, "Impulse

@@ -1,4 +1,4 @@
-//! Ball flight in the full solver (issue 13; `host_sim::full`, the law of
+//! Ball flight in the full solver (`host_sim::full`, the law of
 //! `absorber_core::flight`) over long runs of the paper scene. The closed-form and
 //! conservation tests are the unit tests of `host-sim/src/full/flight.rs`; the agreement with
 //! the core is in `full_vs_core.rs`.

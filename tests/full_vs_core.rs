@@ -365,7 +365,7 @@ fn slender_beams_static_agree_or_fail_with_the_same_error() {
     assert_eq!(field(ef), "ball.stop_angle");
 }
 
-/// Ball flight (issue 13): the paper scene (Table 1, N = 3) at 4.10 Hz, where the track would
+/// Ball flight: the paper scene (Table 1, N = 3) at 4.10 Hz, where the track would
 /// pull the ball, with flight on in both solvers: separations (from N of the ball's equation
 /// with the step's accelerations), flights, bounces and plastic landings, and stop impacts on
 /// the track, agree step for step — the same events in the same steps, tip within `tol·L/100`

@@ -1,4 +1,4 @@
-//! The ball leaves the track (issue 13): separation where the track would have to pull the
+//! The ball leaves the track: separation where the track would have to pull the
 //! ball, free flight inside the housing, landing, and the stops in flight (docs/model.md,
 //! "Contact and flight").
 //!

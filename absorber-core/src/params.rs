@@ -64,7 +64,7 @@ pub struct BallParams<T> {
     /// model.
     pub stop_contact_time: T,
     /// The ball may leave the track when the track would have to pull it (normal force
-    /// `N < 0`), fly inside the housing and land again ([`crate::flight`]; issue 13). `false`
+    /// `N < 0`), fly inside the housing and land again ([`crate::flight`]). `false`
     /// keeps the bilateral track of the paper (the ball is held on its circle by any force),
     /// bit-identical to the rolling model. Only scenes whose type allows flight
     /// ([`crate::Scene::FLIGHT`]) read it. Default `true`.

@@ -322,7 +322,7 @@ pub fn csv(points: &[FatiguePoint], category: &str, moment: &str) -> String {
 }
 
 /// The damage rate of the scene's model beside its calibrated twin and a converged mesh, per
-/// frequency (issue 12): `model` = the scene's N elements as given, `calibrated` = N elements
+/// frequency: `model` = the scene's N elements as given, `calibrated` = N elements
 /// with the calibration fitted to the full solver, `converged` = the core with M elements,
 /// uncalibrated.
 #[derive(Clone, Debug, Serialize)]

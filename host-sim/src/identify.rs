@@ -746,8 +746,8 @@ mod tests {
     /// 0.1 %), its acceleration identified by random decrement. Budgets: f within 0.5 %; both
     /// f and ζ within 3σ of the uncertainty the tool states (its contract), plus 0.1 %. ζ itself
     /// is only as good as random decrement on 2000 s of record: measured +20 % at this seed
-    /// (+4 % with another), which the stated uncertainty must cover; the 10 % ζ budget of
-    /// issue 12 is for free decays (tests/calibration.rs: −0.3 %).
+    /// (+4 % with another), which the stated uncertainty must cover; the 10 % ζ budget is
+    /// for free decays (tests/calibration.rs: −0.3 %).
     #[test]
     fn ambient_response_is_identified_by_random_decrement() {
         let (f, z, dt, sub) = (1.0, 0.01, 0.02, 10);

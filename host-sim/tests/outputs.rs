@@ -1,5 +1,5 @@
 //! Outputs that cannot tear or lie, bounded runs, refused input, visible failures, measured
-//! excitation, the README's sample output (issue 14).
+//! excitation, the README's sample output.
 
 use host_sim::excitation::Excitation;
 use std::path::{Path, PathBuf};

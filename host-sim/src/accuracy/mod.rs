@@ -1,4 +1,4 @@
-//! Error against run time (issue 4): how far an embedded configuration (element count, step,
+//! Error against run time: how far an embedded configuration (element count, step,
 //! precision, Newton budget) is from a converged reference of the full solver, and what it
 //! costs. `host-sim accuracy` regenerates `docs/accuracy.md` and `docs/img/accuracy_*.png`.
 //!

@@ -344,7 +344,7 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
         })
         .collect();
     // 3. Candidates (in parallel), 4. timing (sequential, after).
-    // The calibrated models (issue 12) are fitted to the converged full solver (N = 16).
+    // The calibrated models are fitted to the converged full solver (N = 16).
     let cands = all_candidates()?;
     let jobs: Vec<(usize, usize)> = (0..cands.len())
         .flat_map(|c| (0..all.len()).map(move |s| (c, s)))

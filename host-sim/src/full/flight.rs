@@ -1,4 +1,4 @@
-//! Ball flight in the full solver (issue 13; the law: /work/flight-spec.md, the embedded
+//! Ball flight in the full solver (docs/model.md, "Contact and flight"; the embedded
 //! core's `absorber_core::flight` implements the same physics in minimal coordinates).
 //!
 //! **Flight mode** ([`Mode::Flying`]): the rolling contact constraints `c₄` (circle) and `c₅`
@@ -731,7 +731,7 @@ mod tests {
     use crate::sim::Simulator;
     use absorber_core::Params;
 
-    /// (a) Issue 13's first test, as the core's (`absorber-core/tests/flight.rs`): a stiff beam
+    /// (a) The first test, as the core's (`absorber-core/tests/flight.rs`): a stiff beam
     /// (E × 10⁴, first mode ≈ 400 Hz) makes the housing follow the base, which accelerates
     /// down at 1.5 g from rest. The ball leaves the track in the step where the rolling
     /// model's normal force first turns negative (the same run with `ball.flight = false`,

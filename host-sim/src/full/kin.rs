@@ -14,7 +14,7 @@
 //! c₆′  = θ                               (static solve of a free ball: pinned plumb)
 //! ```
 //!
-//! While the ball flies (issue 13, /work/flight-spec.md) only the fixed joint c₁…c₃ is active:
+//! While the ball flies only the fixed joint c₁…c₃ is active:
 //! the ball's `(φ, R_b1, R_b2)` are independent coordinates ([`Mode::Flying`]).
 //!
 //! For each one: value, gradient `∂c/∂w` and the quadratic term `ẇᵀ (∂²c/∂w²) ẇ`, so that

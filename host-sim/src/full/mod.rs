@@ -45,7 +45,7 @@
 //! solve; a reused factorization must halve the scaled correction of the previous iteration, else
 //! the correction is discarded and the matrix is rebuilt at the same iterate (the core's rule).
 //!
-//! **Ball flight** (issue 13, `flight.rs`): with `ball.flight` a free ball leaves the track where
+//! **Ball flight** (`flight.rs`): with `ball.flight` a free ball leaves the track where
 //! the track would have to pull it, and the partition changes: the rolling contact (`c₄`, `c₅`)
 //! is released and the ball's `(φ, R_b1, R_b2)` become independent coordinates (`4N + 3`, a third
 //! reduced Newton matrix: the beam's band plus the ball's diagonal masses). Landings (bounce or
@@ -227,7 +227,7 @@ pub struct FullSolver {
     equilibrium: FullState,
     /// [`FullSolver::heights`] of `equilibrium` (the energies' reference, kept with it).
     eq_heights: (f64, f64, f64),
-    /// The landing of the last step (issue 13).
+    /// The landing of the last step.
     last_landing: Option<Landing<f64>>,
     /// The factorization of the mass and Newton matrices (docs/full-solver.md).
     linear: Linear,
@@ -2549,7 +2549,7 @@ mod tests {
         let mut s = FullSolver::new(Params::default(), SceneKind::FreeBall, 2).expect("valid");
         s.solve_static().expect("static");
         newton_matrix_is_derivative(&s, Mode::Free);
-        // In flight (issue 13): the ball's rows are its mass, the rest as on the track.
+        // In flight: the ball's rows are its mass, the rest as on the track.
         newton_matrix_is_derivative(&s, Mode::Flying);
         // Resting on a stop (φ dependent, θ − ψ = α_lock).
         newton_matrix_is_derivative(&s, Mode::Held(0.6));
