@@ -21,11 +21,13 @@
 //! as for any matrix close to an SPD one. It is not *assumed*: every pivot is checked against
 //! the largest entry of its column below it ([`PIVOT_RATIO`]); if one is smaller, or not
 //! finite, [`BandMatrix::factor`] gives up and the caller factors a fresh copy with
-//! [`factor_pivoted`] (partial pivoting, full matrix). The fallback does run: in the paper's
-//! free-ball run in `f32` with events at their crossing, once in 20 s (step 2,499, the rolling
-//! rest of a step after a landing: a multiplier of 6,400 in column 5; the test
-//! `the_pivoting_fallback_runs_once_in_the_paper_scene` of `tests/work_cap.rs` holds that count), at about 14,000
-//! instructions on a Cortex-M4F. Under a work cap ([`crate::Integrator::max_work`]) it never
+//! [`factor_pivoted`] (partial pivoting, full matrix). The fallback can run: in the paper's
+//! free-ball run in `f32` with events at their crossing it did once in 20 s (the rolling rest of
+//! a step after a landing: a multiplier of 6,400 in column 5), about 14,000 instructions on a
+//! Cortex-M4F, until the event handling kept the accelerations from before an impulse; since
+//! then the paper's runs do not need it (the test `the_pivoting_fallback_in_the_paper_scene` of
+//! `tests/work_cap.rs` holds that count, so a change that makes it run must say so here). Under
+//! a work cap ([`crate::Integrator::max_work`]) it never
 //! runs: its dense LU grows as D³ and is outside the cap's bound, so the solve stops at the
 //! cap instead ([`crate::newton`]).
 //!
