@@ -10,6 +10,7 @@ import json
 import math
 import os
 import pathlib
+import re
 import shutil
 import subprocess
 
@@ -76,7 +77,10 @@ def test_last_tip_deflection_prints_as_the_cli_last_row(paper_csv, paper_run):
 def test_run_summary_is_the_cli_summary(paper_csv, paper_run):
     _, _, summary = paper_csv
     assert paper_run["summary"] == summary
-    assert paper_run["summary"]["impacts"] == 157  # README: 157 stop impacts
+    # The README's sample output ("…; N stop impacts"): the same run, so the same count.
+    shown = re.search(r"; (\d+) stop impacts", (ROOT / "README.md").read_text(encoding="utf-8"))
+    assert shown, "README sample output"
+    assert paper_run["summary"]["impacts"] == int(shown.group(1))
 
 
 def test_static_and_modes_equal_the_cli():
