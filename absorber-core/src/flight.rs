@@ -838,7 +838,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         report.landing = Some(landing);
         report.events.landings += 1;
-        report.events.bounces += u32::from(landing.bounced);
+        report.events.bounces += u8::from(landing.bounced);
         Ok(true)
     }
 

@@ -137,19 +137,26 @@ pub const RESTART_AFTER: u32 = 3;
 /// convergence: it ends a run of failed steps instead of extending it ([`Model::step`]).
 pub const RESTART_INCREMENT: f64 = 100.0;
 
+/// Work units as reported ([`StepReport::work`]): saturated at `u16::MAX`.
+fn units(used: u32) -> u16 {
+    u16::try_from(used).unwrap_or(u16::MAX)
+}
+
 /// How many events of each kind a step had. A step can hold more than one (a bounce and a
 /// stop hit in the rest of the step, a landing and a take-off at the step's end); the report's
-/// `impact` and `landing` describe one of them, these count all.
+/// `impact` and `landing` describe one of them, these count all. Bytes: a step holds a few
+/// events at most (each sub-step of the step ends at one), and the report stays small enough
+/// to be moved inline (at most 64 B on a Cortex-M4F; larger, every copy is a `memcpy` call).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EventCounts {
     /// Take-offs from the track.
-    pub separations: u32,
+    pub separations: u8,
     /// Landings on the track (bounces and rolling landings).
-    pub landings: u32,
+    pub landings: u8,
     /// The landings that bounced (the ball flew on).
-    pub bounces: u32,
+    pub bounces: u8,
     /// Stop impacts (on the track and in flight, a plastic return onto the stop included).
-    pub impacts: u32,
+    pub impacts: u8,
 }
 
 /// What one step did.
@@ -166,8 +173,9 @@ pub struct StepReport<T> {
     /// Landing on the track within the step, if any (the last one).
     pub landing: Option<crate::flight::Landing<T>>,
     /// Work units the step used ([`crate::newton::work`]; at most
-    /// [`crate::Integrator::max_work`]).
-    pub work: u32,
+    /// [`crate::Integrator::max_work`], and shown saturated at 65,535: the unlimited cap of
+    /// the host's default is [`crate::newton::work::UNLIMITED`], 50,000).
+    pub work: u16,
     /// Whether the step converged, was capped or restarted the model.
     pub outcome: Outcome,
     /// How many separations, landings and stop impacts the step had.
@@ -514,7 +522,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         match result {
             Ok(mut report) => {
                 self.work.commit();
-                report.work = self.work.used();
+                report.work = units(self.work.used());
                 if capped {
                     report.outcome = Outcome::Capped;
                 }
@@ -535,7 +543,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 self.recovery.run += 1;
                 self.recovery.kept += 1;
                 if self.recovery.run >= RESTART_AFTER {
-                    return Ok(self.recover(base_accel, self.work.used()));
+                    return Ok(self.recover(base_accel, units(self.work.used())));
                 }
                 Err(e)
             }
@@ -548,7 +556,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// new state.
     #[inline(never)]
     #[cold]
-    fn recover(&mut self, base_accel: T, work: u32) -> StepReport<T> {
+    fn recover(&mut self, base_accel: T, work: u16) -> StepReport<T> {
         let report = StepReport {
             iterations: 0,
             increment: T::zero(),
@@ -617,7 +625,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         self.recovery.kept += 1;
         self.state = before.0;
         if self.recovery.run >= RESTART_AFTER {
-            let _ = self.recover(base_accel, self.work.used());
+            let _ = self.recover(base_accel, units(self.work.used()));
             return true;
         }
         self.work.clear();

@@ -40,7 +40,7 @@ fn flight_under_harmonic_base_motion_is_a_free_fall_in_the_inertial_frame() {
         vb += h * (u0 + u1) / 2.0;
         let r = m.step(u1).expect("step");
         let event = r.events.separations + r.events.landings + r.events.impacts > 0;
-        flights += r.events.separations;
+        flights += u32::from(r.events.separations);
         let Some((c, v)) = m.ball_centre().filter(|_| m.in_flight()) else {
             start = None;
             continue;
@@ -89,10 +89,10 @@ fn every_event_of_a_step_is_counted() {
             .step(-0.5e-3 * w * w * (w * f64::from(k) * h).sin())
             .expect("step");
         let e = r.events;
-        sep += e.separations;
-        land += e.landings;
-        bounce += e.bounces;
-        impacts += e.impacts;
+        sep += u32::from(e.separations);
+        land += u32::from(e.landings);
+        bounce += u32::from(e.bounces);
+        impacts += u32::from(e.impacts);
         // What a report of at most one event of a kind per step gave.
         one_sep += u32::from(r.separation.is_some());
         one_land += u32::from(r.landing.is_some());

@@ -39,7 +39,7 @@ fn no_step_exceeds_its_cap_and_no_error_run_outlasts_the_restart_rule() {
         for _ in 0..3000 {
             match m.step(1.0e4 * rng.next()) {
                 Ok(r) => {
-                    assert!(r.work <= cap, "work {} above the cap {cap}", r.work);
+                    assert!(u32::from(r.work) <= cap, "work {} above the cap {cap}", r.work);
                     errors_in_a_row = 0;
                     match r.outcome {
                         Outcome::Restarted => restarts += 1,
@@ -150,7 +150,7 @@ fn at_the_cap_the_state_is_kept_or_the_step_taken_and_flagged() {
             (AtCap::Keep, Err(Error::WorkCap)) => assert_eq!(*m.state(), before),
             (AtCap::Take, Ok(r)) => {
                 assert_eq!(r.outcome, Outcome::Capped);
-                assert!(r.work <= work::MIN_CAP && r.increment.is_finite());
+                assert!(u32::from(r.work) <= work::MIN_CAP && r.increment.is_finite());
                 assert_ne!(*m.state(), before);
             }
             (k, r) => panic!("{k:?}: {r:?}"),

@@ -1419,7 +1419,7 @@ fn report_of<T: Real>(r: &StepReport<T>) -> AbsorberReport<T> {
         impact_relative_speed: z,
         impact_impulse: z,
         impact_energy_loss: z,
-        work: r.work,
+        work: u32::from(r.work),
         outcome: match r.outcome {
             Outcome::Converged => ABSORBER_OUTCOME_CONVERGED,
             Outcome::Capped => ABSORBER_OUTCOME_CAPPED,
@@ -1948,7 +1948,7 @@ unsafe fn monitor_record<T: Scalar>(
             tangential_impulse: r.landing_tangential_impulse,
             bounced: r.landing == 1,
         }),
-        work: r.work,
+        work: u16::try_from(r.work).unwrap_or(u16::MAX),
         outcome: match r.outcome {
             ABSORBER_OUTCOME_CAPPED => Outcome::Capped,
             ABSORBER_OUTCOME_RESTARTED => Outcome::Restarted,
@@ -1956,10 +1956,10 @@ unsafe fn monitor_record<T: Scalar>(
         },
         // The C report carries one event of each kind (its flags): counted as such.
         events: absorber_core::EventCounts {
-            separations: u32::from(r.separation != 0),
-            landings: u32::from(r.landing != 0),
-            bounces: u32::from(r.landing == 1),
-            impacts: u32::from(r.impact != 0),
+            separations: u8::from(r.separation != 0),
+            landings: u8::from(r.landing != 0),
+            bounces: u8::from(r.landing == 1),
+            impacts: u8::from(r.impact != 0),
         },
     };
     match m.record(mon, &rep, base_accel) {

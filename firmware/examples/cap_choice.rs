@@ -42,7 +42,7 @@ fn run<S: Scene, const N: usize, const D: usize>(cap: u32, modified: bool) -> Re
     for k in 1..=STEPS {
         match m.step(base_accel(k, h, FREQUENCY_HZ)) {
             Ok(rep) => {
-                r.max_work = r.max_work.max(rep.work);
+                r.max_work = r.max_work.max(u32::from(rep.work));
                 match rep.outcome {
                     Outcome::Capped => r.capped += 1,
                     Outcome::Restarted => r.restarts += 1,

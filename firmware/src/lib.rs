@@ -778,10 +778,10 @@ pub fn run<M: Sim, W: Write, P: Probe>(
             Ok(rep) => {
                 s.iterations += rep.iterations;
                 s.max_iterations = s.max_iterations.max(rep.iterations);
-                s.max_work = s.max_work.max(rep.work);
+                s.max_work = s.max_work.max(u32::from(rep.work));
                 hash.word(rep.iterations);
                 hash.word(rep.increment.to_bits());
-                hash.word(rep.work);
+                hash.word(u32::from(rep.work));
                 hash.word(rep.outcome as u32);
                 if let Some(i) = rep.impact {
                     s.impacts += 1;

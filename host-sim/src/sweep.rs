@@ -105,7 +105,7 @@ fn point(scene: &Scene, f: f64, last: f64, progress: &(dyn Fn(u64) + Sync)) -> S
         &exc,
         steps,
         |r| {
-            impacts += r.events.impacts;
+            impacts += u32::from(r.events.impacts);
             max_it = max_it.max(r.iterations);
             if r.t >= from - 1e-9 {
                 lo = lo.min(r.tip_deflection);

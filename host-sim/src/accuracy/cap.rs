@@ -70,7 +70,7 @@ pub fn run(stress: Option<&'static Stress>, cap: u32, at_cap: AtCap) -> anyhow::
         let normal = match m.step(a) {
             Ok(rep) => {
                 r.impacts += u32::from(rep.impact.is_some());
-                r.max_work = r.max_work.max(rep.work);
+                r.max_work = r.max_work.max(u32::from(rep.work));
                 match rep.outcome {
                     Outcome::Converged => true,
                     Outcome::Capped => {

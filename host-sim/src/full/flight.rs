@@ -530,7 +530,7 @@ impl FullSolver {
         }
         report.landing = Some(landing);
         report.events.landings += 1;
-        report.events.bounces += u32::from(landing.bounced);
+        report.events.bounces += u8::from(landing.bounced);
         if s.contact == Contact::InFlight {
             self.after_impulse(s, &prior);
             Ok(())
