@@ -494,7 +494,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     ///
     /// **Work.** The step does at most [`crate::Integrator::max_work`] units of work
     /// ([`crate::newton::work`]). A Newton solve that reaches the cap stops with its iterate:
-    /// the step is taken and flagged [`Outcome::Capped`].
+    /// the step is taken and flagged [`Outcome::Capped`]. A step that would restart the model
+    /// (below) runs with [`crate::newton::work::RESTART`] units less, the restart's own.
     ///
     /// **Errors.** On error the state is left exactly as it was, and so is everything that
     /// influences later steps (modified Newton's kept matrix included). An input that is not
@@ -513,7 +514,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     #[inline(never)]
     pub fn step(&mut self, base_accel: T) -> Result<StepReport<T>, Error> {
         self.check_input(base_accel)?;
-        let cap = self.sys.params.integrator.max_work;
+        let mut cap = self.sys.params.integrator.max_work;
+        if self.recovery.run + 1 >= RESTART_AFTER {
+            // This step restarts the model if it fails or is capped far: the restart's work is
+            // reserved (the cap is then met by the restart step too).
+            cap = cap
+                .saturating_sub(crate::newton::work::RESTART)
+                .max(crate::newton::work::MIN_CAP);
+        }
         self.work.begin_step(self.sys.params.integrator.newton, cap);
         let result = self
             .sys

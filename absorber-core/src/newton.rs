@@ -89,6 +89,11 @@ pub mod work {
     /// impulse metric, the consistent acceleration and the rest of the step, each with a refresh
     /// and a few iterations); a step that cannot afford it puts the event at its end.
     pub const SPLIT: u32 = 4 * REFRESH + 8 * (RESIDUAL + SOLVE);
+    /// A restart of the model ([`crate::Model::step`], "Recovery": the failed step's state put
+    /// back, the start state with the input's consistent acceleration, about 1,300 instructions
+    /// on the M4F), reserved in advance: a step that restarts the model if it fails or is capped
+    /// runs with its cap lower by this much, so that the restart too stays within the cap.
+    pub const RESTART: u32 = 3;
     /// The firmware's cap with events at the step end (`docs/embedded.md`): what the paper's
     /// free ball needs in its hardest step, so that its input is never capped, and no more.
     pub const DEADLINE: u32 = 48;
