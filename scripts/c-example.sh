@@ -152,6 +152,8 @@ for k in set(prust) | set(pc):
         same[short(k)] = same.get(short(k), 0) + pc.get(k, 0) - prust.get(k, 0)
 top = sorted(same.items(), key=lambda kv: -abs(kv[1]))[:4]
 sizes = [int(x) for x in (out / "text-sizes").read_text().split()]
+boot = re.findall(r"^# boot stack from reset, (.*) = (\d+) bytes$", (out / "run.txt").read_text(), re.M)
+assert len(boot) == 2, boot
 text = (
     f"instructions per step, free ball N = 3 f32, profile fw, mean over 6667 steps:\n"
     f"  Rust firmware fw-free, Sim::step       {mr:,.1f} (worst {max(rust):,})\n"
@@ -162,6 +164,8 @@ text = (
     f"  of which the core compiled into the library, largest per function: "
     + ", ".join(f"{n} {d:+,.1f}" for n, d in top) + "\n"
     f".text of the images: fw-free {sizes[0]:,}, fw-free-monitor {sizes[1]:,}, C example {sizes[2]:,}\n"
+    f"boot stack from reset of the C example (model and monitor built in place): "
+    + ", ".join(f"{what} {int(b):,} B" for what, b in boot) + "\n"
 )
 (out / "report.txt").write_text(text)
 print(text, end="")

@@ -96,7 +96,7 @@ use absorber_core::{
     Scene, Side, StepReport,
 };
 use core::ffi::{c_char, c_void};
-use core::mem::{align_of, size_of};
+use core::mem::{align_of, size_of, MaybeUninit};
 
 /// The prebuilt variants: scene, element count, unknowns, scalar.
 pub mod variants {
@@ -682,7 +682,12 @@ trait Erased<T: Real> {
     fn energies(&self, base_velocity: T, base_displacement: T) -> AbsorberEnergies<T>;
     fn state(&self) -> (&[T], &[T], &[T], AbsorberStateInfo<T>);
     fn root_stress(&self) -> Result<T, Error>;
-    fn new_monitor(&self, config: MonitorConfig<T>) -> Result<Monitor<T>, Error>;
+    /// Builds the monitor of this model in `slot` (in place: no monitor on the stack).
+    fn new_monitor_in<'a>(
+        &self,
+        slot: &'a mut MaybeUninit<Monitor<T>>,
+        config: MonitorConfig<T>,
+    ) -> Result<&'a mut Monitor<T>, Error>;
     fn record(
         &self,
         monitor: &mut Monitor<T>,
@@ -780,8 +785,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Erased<T> for Model<T, S
         Ok(section.stress_of_moment(section.root_moment(self, MomentEstimate::Reaction)))
     }
 
-    fn new_monitor(&self, config: MonitorConfig<T>) -> Result<Monitor<T>, Error> {
-        Monitor::new(config, self)
+    fn new_monitor_in<'a>(
+        &self,
+        slot: &'a mut MaybeUninit<Monitor<T>>,
+        config: MonitorConfig<T>,
+    ) -> Result<&'a mut Monitor<T>, Error> {
+        Monitor::new_in(slot, config, self)
     }
 
     fn record(
@@ -1110,20 +1119,20 @@ unsafe fn build<T: Real, S: Scene, const N: usize, const D: usize>(
         // SAFETY: forwarded.
         Err(e) => return unsafe { fail_core(error, &e) },
     };
-    let model = match Model::<T, S, N, D>::at_rest(p, lit(base_accel)) {
-        Ok(m) => m,
-        // SAFETY: forwarded.
-        Err(e) => return unsafe { fail_core(error, &e) },
-    };
     let slot = storage.cast::<Slot<Model<T, S, N, D>>>();
     // SAFETY: the storage is large enough (checked) and aligned (checked by the caller); any
-    // earlier content is plain data (no destructor to run).
+    // earlier content is plain data (no destructor to run). The model is built in place in the
+    // slot's value (no model on the caller's boot stack); the header is cleared first and
+    // written last, so that a failed build leaves no valid handle.
     unsafe {
-        slot.write(Slot {
-            magic: MODEL_MAGIC,
-            tag,
-            value: model,
-        });
+        core::ptr::addr_of_mut!((*slot).magic).write(0);
+        let value = &mut *core::ptr::addr_of_mut!((*slot).value)
+            .cast::<MaybeUninit<Model<T, S, N, D>>>();
+        if let Err(e) = Model::<T, S, N, D>::at_rest_in(value, p, lit(base_accel)) {
+            return fail_core(error, &e);
+        }
+        core::ptr::addr_of_mut!((*slot).tag).write(tag);
+        core::ptr::addr_of_mut!((*slot).magic).write(MODEL_MAGIC);
         out.write(slot.cast::<AbsorberModel>());
     }
     AbsorberStatus::Ok
@@ -1823,16 +1832,19 @@ unsafe fn monitor_init<T: Scalar>(
                 "is smaller than ABSORBER_MONITOR_SIZE_F32/_F64",
             );
         }
-        let m = match monitor_config(config, model.params()).and_then(|c| model.new_monitor(c)) {
-            Ok(m) => m,
-            Err(e) => return fail_core(error, &e),
-        };
         let slot = storage.cast::<Slot<Monitor<T>>>();
-        slot.write(Slot {
-            magic: MONITOR_MAGIC,
-            tag: T::MONITOR_TAG,
-            value: m,
-        });
+        // The monitor is built in place in the slot's value (its window alone is kilobytes: a
+        // C caller's boot stack does not carry a copy); the header is cleared first and
+        // written last, so that a failed build leaves no valid handle.
+        core::ptr::addr_of_mut!((*slot).magic).write(0);
+        let value = &mut *core::ptr::addr_of_mut!((*slot).value).cast::<MaybeUninit<Monitor<T>>>();
+        if let Err(e) =
+            monitor_config(config, model.params()).and_then(|c| model.new_monitor_in(value, c))
+        {
+            return fail_core(error, &e);
+        }
+        core::ptr::addr_of_mut!((*slot).tag).write(T::MONITOR_TAG);
+        core::ptr::addr_of_mut!((*slot).magic).write(MONITOR_MAGIC);
         out.write(slot.cast::<AbsorberMonitor>());
     }
     AbsorberStatus::Ok

@@ -36,6 +36,27 @@ void sh_exit(int code)
     }
 }
 
+#define PAINT 0xCCCCCCCCu
+
+/* Not inlined: its own frame lies below the caller's, and the paint stops below both. */
+__attribute__((noinline)) void stack_paint(void)
+{
+    uint32_t *sp;
+    __asm__ volatile("mov %0, sp" : "=r"(sp));
+    for (volatile uint32_t *p = &_ebss; p < sp - 16; p++) {
+        *p = PAINT;
+    }
+}
+
+uint32_t stack_used(void)
+{
+    const volatile uint32_t *p = &_ebss;
+    while (p < &_stack_top && *p == PAINT) {
+        p++;
+    }
+    return (uint32_t)((uintptr_t)&_stack_top - (uintptr_t)p);
+}
+
 void reset_handler(void)
 {
     uint32_t *src = &_sidata, *dst = &_sdata;
@@ -48,6 +69,7 @@ void reset_handler(void)
     /* CPACR: full access to CP10 and CP11 (the FPU), before any floating-point instruction. */
     *(volatile uint32_t *)0xE000ED88 |= 0xFu << 20;
     __asm__ volatile("dsb\n\tisb" ::: "memory");
+    stack_paint();
     sh_exit(main());
 }
 
