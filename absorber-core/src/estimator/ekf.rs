@@ -552,23 +552,34 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     /// One sample: the model steps to the base acceleration `base_accel` \[m/s²\] under the
     /// predicted tip load, then the readings that arrived correct it. On error (non-finite
     /// base acceleration, failed step, a correction that leaves the physical range) the model
-    /// and the filter keep their state, and the sample counts as failed in the verdict.
+    /// and the filter keep their state, and the sample counts as failed in the verdict and
+    /// toward the model's restart rule ([`Model::step`], "Recovery"): the
+    /// [`crate::RESTART_AFTER`]-th failed sample in a row restarts the model at rest and the
+    /// load estimate at zero, so that a state the filter cannot correct is not kept for ever.
     pub fn update(
         &mut self,
         model: &mut Model<T, S, N, D>,
         base_accel: T,
         readings: &Readings<T>,
     ) -> Result<Estimate<T>, Error> {
-        let before = *model.state();
+        let before = (*model.state(), model.recovery());
         let loads = Loads {
             tip_force: self.load_map[0][0] * self.load + self.load_map[0][1] * self.load_rate,
             line_load: [T::zero(); N],
         };
+        // A failed step keeps the model's state and counts itself; a refused correction takes
+        // the step back and counts.
         let result = model
             .step_with_loads(base_accel, &loads)
-            .and_then(|report| self.correct(model, readings, report));
+            .and_then(|report| {
+                self.correct(model, readings, report).inspect_err(|_| {
+                    if model.refuse_step(before, base_accel) {
+                        self.load = T::zero();
+                        self.load_rate = T::zero();
+                    }
+                })
+            });
         if result.is_err() {
-            model.set_state(before);
             self.health
                 .record([false; KINDS], [false; KINDS], T::zero(), 0, true);
         }
