@@ -39,7 +39,11 @@ fn no_step_exceeds_its_cap_and_no_error_run_outlasts_the_restart_rule() {
         for _ in 0..3000 {
             match m.step(1.0e4 * rng.next()) {
                 Ok(r) => {
-                    assert!(u32::from(r.work) <= cap, "work {} above the cap {cap}", r.work);
+                    assert!(
+                        u32::from(r.work) <= cap,
+                        "work {} above the cap {cap}",
+                        r.work
+                    );
                     errors_in_a_row = 0;
                     match r.outcome {
                         Outcome::Restarted => restarts += 1,

@@ -1126,8 +1126,8 @@ unsafe fn build<T: Real, S: Scene, const N: usize, const D: usize>(
     // written last, so that a failed build leaves no valid handle.
     unsafe {
         core::ptr::addr_of_mut!((*slot).magic).write(0);
-        let value = &mut *core::ptr::addr_of_mut!((*slot).value)
-            .cast::<MaybeUninit<Model<T, S, N, D>>>();
+        let value =
+            &mut *core::ptr::addr_of_mut!((*slot).value).cast::<MaybeUninit<Model<T, S, N, D>>>();
         if let Err(e) = Model::<T, S, N, D>::at_rest_in(value, p, lit(base_accel)) {
             return fail_core(error, &e);
         }
