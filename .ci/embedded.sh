@@ -45,7 +45,7 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail=0
 # Every bin but fw-planted (never run: its planted panic is only analysed).
-for scene in free free-rolling free-flight free-modified free-monitor free-n6 beam locked estimator cost empty; do
+for scene in free free-rolling free-flight free-modified free-monitor free-n6 beam locked estimator monitor-loop cost empty; do
     "$tdir/release/fw-$scene" >"$out/$scene.host"
     hash=$(sed -n 's/^\(.* \)\{0,1\}state_hash=//p' "$out/$scene.host")
     # fw-cost takes its configuration as arguments (none: its default) and checks no

@@ -25,7 +25,8 @@ BINS = [("free", "free_n3_f32", "free ball, stops, flight (`FreeBallModel<f32, 3
         ("free-n6", "free_n6_f32", "free ball, stops, N = 6 (`FreeBallModel<f32, 6, 25>`)"),
         ("beam", "beam_n3_f32", "beam only (`BeamModel<f32, 3, 12>`)"),
         ("locked", "locked_n3_f32", "locked ball (`LockedBallModel<f32, 3, 12>`)"),
-        ("estimator", "estimator_n3_f32", "mast-arm monitor: `Arm<BeamOnly>` model + `Estimator::update` + `StressDamage::push` (h = 10 ms)")]
+        ("estimator", "estimator_n3_f32", "mast-arm monitor: `Arm<BeamOnly>` model + `Estimator::update` + `StressDamage::push` (h = 10 ms)"),
+        ("monitor-loop", "monitor_loop_n3_f32", "pole monitor sample: tip accelerometer read + `Ekf::update` (free ball, stops, flight) + `Monitor::record`")]
 SCENES = [(b, l) for b, _, l in BINS]
 KEYS = {b: k for b, k, _ in BINS}
 PROFILES = [("fw", "opt-level 3, fat LTO"), ("fw-size", "opt-level \"s\", fat LTO")]
@@ -44,6 +45,11 @@ STRESS_SUBSET = ["resonance_40x", "glitch_full", "noise"]
 STRESS_EXTRA = {"estimator": ["glitch_8g", "glitch_16g", "one_glitch"]}
 # The operations the work cap counts (in the order embedded-report.sh passes their patterns).
 OPS = ["assembly", "factor", "fallback", "residual", "solve"]
+# Operations a bin does every sample outside its model's cap, by the code's structure: the
+# monitor loop's filter linearizes each step (`Ekf::directions`: two assemblies, R_q and R_v,
+# and 2M + 1 = 7 back-substitutions with the step's factors; a refresh it needs is charged to
+# the cap). The static bound adds them at their most measured cost.
+FIXED_OPS = {"monitor-loop": {"assembly": 2, "solve": 7}}
 
 
 def stress_runs():
@@ -449,6 +455,7 @@ for scene, label in SCENES:
         best[c] = max([best[c - 1]] + [best[c - w] + k for w, k, lim in cost.values() if lim is None and w <= c])
     ops_bound = max(best[summ["cap"] - j * u["solve"]] + j * most["solve"]
                     for j in range(0, 4) if j * u["solve"] <= summ["cap"])
+    ops_bound += sum(n * most[op] for op, n in FIXED_OPS.get(scene, {}).items())
     bound = ops_bound + glue
     bounds[key] = {"cap": summ["cap"], "most": most, "cost": cost, "ops": ops_bound, "glue": glue,
                    "bound": bound, "worst_all": worst_all}
@@ -530,7 +537,7 @@ def check(key, f):
         bad.append("a step above the bound")
     if "stack_bound" in b and (f["stack_bound"] is None or f["stack_bound"] > b["stack_bound"]):
         bad.append(f"stack > {b['stack_bound']:,}")
-    if f["panic_paths_from_step"] or f["indirect_calls_from_step"]:
+    if f["panic_paths_from_step"] > b.get("panic_paths", 0) or f["indirect_calls_from_step"]:
         bad.append("panic path or indirect call reachable")
     return bad
 
@@ -567,7 +574,9 @@ w("A step charges every expensive operation to its work cap before doing it "
   "step). The most instructions the cap allows is the best packing of those shapes into the cap "
   "(a knapsack over their largest measured costs); the rest of a step (predictor, event tests "
   "and impulses, checks, a restart) is the largest remainder of any step of any run. Bound = "
-  "operations + rest; every step of every run is checked against it (the budget fails otherwise).")
+  "operations + rest; every step of every run is checked against it (the budget fails otherwise). "
+  "The monitor loop's operations also hold its filter's own, outside the cap, every sample: two "
+  "assemblies (the sensitivity's R_q and R_v) and seven back-substitutions.")
 w("")
 w("| bin | cap [units] | refreshed iteration (17) | reused iteration (6) | impulse matrix (16) | test residual (5) "
   "| impulse back-substitution (1) | operations, at most | rest of a step, at most | **bound** | worst observed (all runs) |")

@@ -62,7 +62,7 @@ ops=(' absorber_core::system::System<T,S,_,_>::residual_and_jacobian$'
     ' absorber_core::system::System<T,S,_,_>::residual$'
     ' absorber_core::newton::Workspace<T,_>::solve$')
 step=' as absorber_firmware::Sim>::step$'
-scenes=(free free-rolling free-flight free-modified free-monitor free-n6 beam locked estimator)
+scenes=(free free-rolling free-flight free-modified free-monitor free-n6 beam locked estimator monitor-loop)
 for profile in fw fw-size; do
     for scene in "${scenes[@]}" empty planted; do
         elf=$tdir/$target/$profile/fw-$scene

@@ -4,7 +4,8 @@
 //! the host as the bit-for-bit reference.
 //!
 //! Every bin of this crate (`fw-free`, `fw-free-modified`, `fw-free-monitor`, `fw-beam`,
-//! `fw-locked`, and the model-less baseline `fw-empty`) builds twice from one source:
+//! `fw-locked`, the monitor loop `fw-monitor-loop` ([`monitor_loop`]), and the model-less
+//! baseline `fw-empty`, among others) builds twice from one source:
 //!
 //! * for `thumbv7em-none-eabihf`: `no_std`, `no_main`, cortex-m-rt, output and exit code through
 //!   semihosting; the model lives in a `static` (so it shows in `.bss`);
@@ -81,6 +82,11 @@ pub trait Sim: Sized {
     fn spin_start(&mut self, rate: f32) -> Result<(), Error> {
         let _ = rate;
         Ok(())
+    }
+    /// Advances what the sensors measure to the new base acceleration, before [`Sim::step`]
+    /// (a scene whose sample reads a simulated structure: the test harness, not counted).
+    fn environment(&mut self, base_accel: f32) {
+        let _ = base_accel;
     }
     /// One model step to the new base acceleration. Never inlined: its instructions are counted.
     fn step(&mut self, base_accel: f32) -> Result<StepReport<f32>, Error>;
@@ -398,6 +404,30 @@ impl<
         const CAP: usize,
         const K: usize,
         const W: usize,
+    > WithMonitor<Model<f32, S, N, D>, CAP, K, W>
+{
+    /// The model with `p` in place, then the monitor in place beside it (`Monitor::new_in`):
+    /// neither passes through the stack.
+    pub fn init_with(slot: &mut MaybeUninit<Self>, p: Params<f32>) -> Result<&mut Self, Error> {
+        let model = Model::<f32, S, N, D>::at_rest_in(field!(slot, model), p, 0.0)?;
+        Monitor::<f32, NoTwin, CAP, K, W>::new_in(
+            field!(slot, monitor),
+            MonitorConfig::paper(&p)?,
+            model,
+        )?;
+        field!(slot, record_errors).write(0u32);
+        // SAFETY: every field was just initialized.
+        Ok(unsafe { slot.assume_init_mut() })
+    }
+}
+
+impl<
+        S: Scene,
+        const N: usize,
+        const D: usize,
+        const CAP: usize,
+        const K: usize,
+        const W: usize,
     > Sim for WithMonitor<Model<f32, S, N, D>, CAP, K, W>
 {
     fn name() -> &'static str {
@@ -418,16 +448,7 @@ impl<
     /// The model in place, then the monitor in place beside it (`Monitor::new_in`): neither
     /// passes through the stack.
     fn init_in<'a>(slot: &'a mut MaybeUninit<Self>, setup: &Setup) -> Result<&'a mut Self, Error> {
-        let p = firmware_params(setup);
-        let model = Model::<f32, S, N, D>::at_rest_in(field!(slot, model), p, 0.0)?;
-        Monitor::<f32, NoTwin, CAP, K, W>::new_in(
-            field!(slot, monitor),
-            MonitorConfig::paper(&p)?,
-            model,
-        )?;
-        field!(slot, record_errors).write(0u32);
-        // SAFETY: every field was just initialized.
-        Ok(unsafe { slot.assume_init_mut() })
+        Self::init_with(slot, firmware_params(setup))
     }
 
     fn spin_start(&mut self, rate: f32) -> Result<(), Error> {
@@ -771,6 +792,7 @@ pub fn run<M: Sim, W: Write, P: Probe>(
             Some(st) => st.accel(k, h, M::frequency(), &mut rng),
             None => base_accel(k, h, M::frequency()),
         };
+        m.environment(accel);
         probe.before_step();
         let r = m.step(accel);
         probe.after_step();
@@ -914,6 +936,7 @@ pub fn host_main<M: Sim>() {
 
 pub mod cost;
 pub mod estimator;
+pub mod monitor_loop;
 pub mod stress;
 #[allow(missing_docs, clippy::excessive_precision, clippy::unreadable_literal)]
 #[rustfmt::skip]
