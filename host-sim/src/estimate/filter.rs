@@ -373,6 +373,8 @@ pub fn bending_corner<S: CoreScene, const D: usize>(model: &Model<f64, S, N, D>)
 pub struct Excess {
     /// Σ (ν² − s) and Σ rms² away from events.
     pub quiet: (f64, f64),
+    /// Σ ν² and Σ s away from events.
+    pub quiet_nis: (f64, f64),
     /// The same near events.
     pub events: (f64, f64),
 }
@@ -388,6 +390,32 @@ impl Excess {
     pub fn event_excess(&self) -> f64 {
         self.events.0 / self.events.1.max(f64::MIN_POSITIVE)
     }
+}
+
+impl Excess {
+    /// `Σ ν² / Σ s` away from events: the mean NIS's ratio form (1: consistent).
+    pub fn quiet_ratio(&self) -> f64 {
+        self.quiet_nis.0 / self.quiet_nis.1.max(f64::MIN_POSITIVE)
+    }
+}
+
+/// The second equation of covariance matching, for when the model error's fixed point is
+/// ε = 0 and the innovations are still smaller than predicted: then the load model's process
+/// noise (the filter's own `h P hᵀ`) is what is overstated, and its variance is scaled by
+/// `λ ≤ 1`, `λ ← λ Σ ν² / Σ s` from `λ = 1` (`ratio(λ)` is that ratio of a calibration run),
+/// until λ moves by less than 2 % (or [`MATCHING_ITERATIONS`]); never raised (the design
+/// load is the prior's bound), never below 10⁻⁴.
+pub fn matched_load_scale(mut ratio: impl FnMut(f64) -> Result<f64>) -> Result<f64> {
+    let mut lambda = 1.0f64;
+    for _ in 0..MATCHING_ITERATIONS {
+        let next = (lambda * ratio(lambda)?).clamp(1e-4, 1.0);
+        let done = (next - lambda).abs() <= 0.02 * next;
+        lambda = next;
+        if done {
+            break;
+        }
+    }
+    Ok(lambda)
 }
 
 /// Iterations of the covariance matching's fixed point at most.
@@ -493,6 +521,10 @@ pub fn run<S: CoreScene, const D: usize, const X: usize>(
                         } else {
                             &mut excess.quiet
                         };
+                        if !(held || since_event < EVENT_WINDOW as usize) {
+                            excess.quiet_nis.0 += nu * nu;
+                            excess.quiet_nis.1 += s;
+                        }
                         slot.0 += nu * nu - s;
                         slot.1 += ema;
                     }
