@@ -138,6 +138,17 @@ fn print_estimators(e: &[EstimatorReport]) {
             r.verdict,
             r.clipped.iter().sum::<usize>()
         );
+        let figures: Vec<String> = r
+            .quality
+            .iter()
+            .map(|q| {
+                format!(
+                    "{} {:.3} (expected {:.2}–{:.2}): {}",
+                    q.figure, q.value, q.expected[0], q.expected[1], q.word
+                )
+            })
+            .collect();
+        println!("      {}", figures.join("; "));
     }
 }
 

@@ -132,6 +132,74 @@ pub struct EstimatorReport {
     pub capped: usize,
     /// RMS of the estimated tip load \[N\].
     pub load_rms: f64,
+    /// Each quality figure beside its expected range and a word ([`Quality`]).
+    pub quality: Vec<Quality>,
+}
+
+/// One quality figure of an estimator beside the range it should lie in, and a word:
+/// `ok` inside `expected`, `poor` inside `tolerated`, `failed` outside, `none` when the
+/// estimator has no such figure (NaN).
+#[derive(Clone, Debug, Serialize)]
+pub struct Quality {
+    /// `nis`, `within_two_sd`, `innovation_ratio`, `stress_rms_error_pct`, `damage_ratio`.
+    pub figure: &'static str,
+    /// Its value.
+    pub value: f64,
+    /// The range of a consistent filter (NIS, coverage, innovation ratio) or of the targets
+    /// (error, damage ratio).
+    pub expected: [f64; 2],
+    /// The wider range still called `poor`.
+    pub tolerated: [f64; 2],
+    /// `ok`, `poor`, `failed` or `none`.
+    pub word: &'static str,
+}
+
+impl Quality {
+    fn of(figure: &'static str, value: f64, expected: [f64; 2], tolerated: [f64; 2]) -> Self {
+        let inside = |r: [f64; 2]| value >= r[0] && value <= r[1];
+        let word = if value.is_nan() {
+            "none"
+        } else if inside(expected) {
+            "ok"
+        } else if inside(tolerated) {
+            "poor"
+        } else {
+            "failed"
+        };
+        Self {
+            figure,
+            value,
+            expected,
+            tolerated,
+            word,
+        }
+    }
+}
+
+/// The quality figures of a report against their ranges. A consistent filter's mean NIS per
+/// measurement is 1 (here 0.5–2, poor within a further factor 2); its innovations' RMS over
+/// their predicted sd is the square root (0.71–1.41, poor 0.5–2); a Gaussian error lies
+/// within ±2 of its sd 95.4 % of the time (0.9–0.99: fewer means overconfident, more
+/// underconfident; poor 0.8–0.999). The stress RMS error and the damage ratio against the
+/// monitor's targets: ≤ 10 % and 0.8–1.25 (poor: ≤ 20 % and 0.67–1.5).
+pub fn quality(r: &EstimatorReport) -> Vec<Quality> {
+    vec![
+        Quality::of("nis", r.nis, [0.5, 2.0], [0.25, 4.0]),
+        Quality::of("within_two_sd", r.within_two_sd, [0.9, 0.99], [0.8, 0.999]),
+        Quality::of(
+            "innovation_ratio",
+            r.innovation_ratio,
+            [0.5f64.sqrt(), 2.0f64.sqrt()],
+            [0.5, 2.0],
+        ),
+        Quality::of(
+            "stress_rms_error_pct",
+            r.stress_rms_error_pct,
+            [0.0, 10.0],
+            [0.0, 20.0],
+        ),
+        Quality::of("damage_ratio", r.damage_ratio, [0.8, 1.25], [0.67, 1.5]),
+    ]
 }
 
 /// The core's fatigue pipeline (as in the firmware) on a stress history: damage without
@@ -271,6 +339,19 @@ pub fn section_f32(s: &RootSection<f64>) -> RootSection<f32> {
         bending_rigidity: s.bending_rigidity as f32,
         stress_per_curvature: s.stress_per_curvature as f32,
         extreme_fibre: s.extreme_fibre as f32,
+    }
+}
+
+/// A run's verdict from the fractions of its samples with each verdict (ok, degraded,
+/// failed): `failed` if ≥ 1 % were failed, else `degraded` if ≥ 1 % were degraded or worse,
+/// else `ok`.
+pub fn run_verdict(fractions: &[f64; 3]) -> &'static str {
+    if fractions[2] >= 0.01 {
+        "failed"
+    } else if fractions[1] + fractions[2] >= 0.01 {
+        "degraded"
+    } else {
+        "ok"
     }
 }
 
