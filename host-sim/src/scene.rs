@@ -1427,7 +1427,7 @@ impl Scene {
             }
         }
         if f.arm.is_some() || !f.loads.is_empty() {
-            w.push("warning: `[arm]`, `[[loads]]` and `[[sensors]]` are used by `estimate` and `tune`; the other commands model the uniform `[beam]` shaken at its base".into());
+            w.push("warning: `[arm]`, `[[loads]]` and `[[sensors]]` are used by `estimate`, `tune`, `modes` and `static`; the other commands (`run`, `sweep`, `fatigue`) model the uniform `[beam]` shaken at its base".into());
         }
         w
     }
