@@ -52,18 +52,31 @@ pub enum Command {
     /// stop); then base_accel [m/s²], tip_velocity [m/s], tip_rate, ball_rate, ball_rel_rate
     /// [rad/s], ball_spin φ [rad], ball_spin_rate [rad/s], normal_force and tangential_force of
     /// the track on a free ball [N] (N < 0: the track would have to pull: a real ball would
-    /// leave it). Base velocity and displacement are closed form for a harmonic excitation and
-    /// integrated (zero mean) for a CSV one. The summary says how long the track pulled and how
-    /// long rolling without slip needed more friction than `ball.friction`.
+    /// leave it); contact (1 on the track, 0 in flight); tip_acceleration, the absolute
+    /// acceleration of the beam end [m/s²] (what a tip accelerometer reads; the column
+    /// `identify` reads by default). Base velocity and displacement are closed form for a
+    /// harmonic excitation. A CSV acceleration record is processed as strong-motion records
+    /// are, so that the base starts and ends at rest: mean removed, zero-padded and high-passed
+    /// by a zero-phase (forward–backward) 2nd-order Butterworth filter with corner
+    /// `excitation.highpass` (default 0.1 Hz; gain ½ there), integrated from rest, and a
+    /// linear acceleration baseline that brings velocity and displacement to zero at the
+    /// record's end; the solver is driven by the processed record. The summary says how long
+    /// the track pulled and how long rolling without slip needed more friction than
+    /// `ball.friction`; its steady figures are over t ≥ the transient to the end (the window
+    /// of `paper`, `sweep` and `fatigue`).
     ///
-    /// Plots `<out>/<name>_{time,fft,phase,energy}.png`: time histories (min/max envelopes),
-    /// FFT of tip and ball after the transient (at most the last 2^20 samples), phase planes
-    /// (y–ẏ, θ–θ̇, φ–φ̇, θ–ψ), energy curves. Then `<out>/<name>.manifest.json`: the command,
+    /// Plots `<out>/<name>_{time,fft,phase,energy}.png` (lengths in mm, angles in degrees,
+    /// energies in mJ): time histories (min/max envelopes), FFT of tip and ball after the
+    /// transient (at most the last 2^20 samples), phase planes (y–ẏ, θ–θ̇, φ–φ̇, θ–ψ; the
+    /// transient grey, the steady state in colour), energies from rest as running means over
+    /// 2 s (the beam → ball transfer). Then `<out>/<name>.manifest.json`: the command,
     /// its status and files. The CSV is streamed (fixed memory); a run has at most 10^9 steps
     /// and its CSV at most 2·10^7 rows (use --every), else it is refused before any work.
     Run(RunArgs),
     /// Frequency response (paper Fig. 10): one run per frequency in parallel, steady-state
-    /// amplitudes of the tip [m] and the ball [deg] over the last part; CSV, PNG and
+    /// amplitudes of the tip [m] and the ball [deg], impacts and flight fraction, every column
+    /// over the steady window (t ≥ `outputs.transient` to the end, as `run` and `paper`; or
+    /// `--last`); the plot (in mm) adds the ball locked (the passive case); CSV, PNG and
     /// `sweep.manifest.json`. A run that fails is marked FAILED (no numbers) in the table, the
     /// CSV (`status` column) and the plot (a cross), and the command exits with code 3.
     Sweep(SweepArgs),
@@ -370,9 +383,11 @@ pub struct SweepArgs {
     /// Excitation frequencies [Hz] (default: the paper's 14, 3.50 … 4.70).
     #[arg(long, value_delimiter = ',', num_args = 1.., allow_negative_numbers = true)]
     pub freqs: Option<Vec<f64>>,
-    /// Steady-state window at the end of each run [s].
-    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
-    pub last: f64,
+    /// Steady-state window: the last `LAST` seconds of each run [s] (default: the run after the
+    /// transient `outputs.transient`, 20 s: the window `run` and `paper` call steady). Every
+    /// column (amplitudes, impacts, flight fraction) is over this window.
+    #[arg(long, allow_negative_numbers = true)]
+    pub last: Option<f64>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub jobs: Option<usize>,

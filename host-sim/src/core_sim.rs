@@ -70,6 +70,7 @@ impl<T: Real + Send, S: Scene + Send, const N: usize, const D: usize> Simulator
             time: f64_of(m.time()),
             tip_deflection: f64_of(m.tip_deflection()),
             tip_velocity: f64_of(m.tip_velocity()),
+            tip_acceleration: m.state().a.get(4 * N - 3).map_or(f64::NAN, |&a| f64_of(a)),
             tip_angle: f64_of(psi),
             tip_rate: f64_of(psi_dot),
             ball_angle: th,

@@ -15,24 +15,34 @@ const MAX_POINTS: usize = 20_000;
 const MAX_BUCKETS: usize = 10_000;
 /// Largest number of samples in the FFT (the last ones after the transient).
 pub const MAX_FFT: usize = 1 << 20;
-/// Quantities of the time-history envelopes.
-const K: usize = 12;
+/// Quantities of the time-history envelopes and running means.
+const K: usize = 15;
+/// Window of the energies' running means \[s\]: several periods of the beam (≥ 1 Hz here), short
+/// against the beam → ball exchange (seconds).
+pub const ENERGY_MEAN_WINDOW: f64 = 2.0;
 
-fn fields(r: &Row) -> [f64; K] {
+/// The plotted quantities of a row: lengths in mm, angles in degrees, energies in mJ; the beam's
+/// strain energy as its change from the first row (`strain0` \[J\]), and the totals from rest.
+fn fields(r: &Row, strain0: f64) -> [f64; K] {
     let e = &r.energies;
+    let strain = e.beam_strain - strain0;
+    let mj = 1e3;
     [
-        r.tip_deflection,
-        r.base_y,
+        1e3 * r.tip_deflection,
+        1e3 * r.base_y,
         r.ball_angle.to_degrees(),
         r.ball_rel_angle.to_degrees(),
         r.tip_angle.to_degrees(),
-        e.beam_strain,
-        e.beam_kinetic,
-        e.beam_potential,
-        e.tip_kinetic,
-        e.tip_potential,
-        e.ball_kinetic,
-        e.ball_potential,
+        mj * strain,
+        mj * e.beam_kinetic,
+        mj * e.beam_potential,
+        mj * e.tip_kinetic,
+        mj * e.tip_potential,
+        mj * e.ball_kinetic,
+        mj * e.ball_potential,
+        mj * (strain + e.beam_kinetic + e.beam_potential),
+        mj * (e.tip_kinetic + e.tip_potential),
+        mj * (e.ball_kinetic + e.ball_potential),
     ]
 }
 
@@ -42,15 +52,28 @@ struct Bucket {
     t1: f64,
     lo: [f64; K],
     hi: [f64; K],
+    sum: [f64; K],
     n: usize,
 }
 
 impl Bucket {
+    fn of(t: f64, v: [f64; K]) -> Self {
+        Self {
+            t0: t,
+            t1: t,
+            lo: v,
+            hi: v,
+            sum: v,
+            n: 1,
+        }
+    }
+
     fn merge(&mut self, o: &Bucket) {
         self.t1 = o.t1;
         for i in 0..K {
             self.lo[i] = self.lo[i].min(o.lo[i]);
             self.hi[i] = self.hi[i].max(o.hi[i]);
+            self.sum[i] += o.sum[i];
         }
         self.n += o.n;
     }
@@ -69,6 +92,8 @@ pub struct PlotData {
     seen: usize,
     fft: VecDeque<(f64, f64, f64)>,
     has_ball: bool,
+    /// The first row's beam strain energy \[J\] (the energies are plotted from it).
+    strain0: Option<f64>,
 }
 
 impl PlotData {
@@ -83,21 +108,17 @@ impl PlotData {
             seen: 0,
             fft: VecDeque::new(),
             has_ball: false,
+            strain0: None,
         }
     }
 
     /// Adds a row.
     pub fn push(&mut self, r: &Row) {
         self.has_ball |= r.ball_angle.is_finite();
-        let v = fields(r);
+        let strain0 = *self.strain0.get_or_insert(r.energies.beam_strain);
+        let v = fields(r, strain0);
         match self.buckets.last_mut() {
-            Some(b) if b.n < self.per_bucket => b.merge(&Bucket {
-                t0: r.t,
-                t1: r.t,
-                lo: v,
-                hi: v,
-                n: 1,
-            }),
+            Some(b) if b.n < self.per_bucket => b.merge(&Bucket::of(r.t, v)),
             _ => {
                 if self.buckets.len() == MAX_BUCKETS {
                     let old = std::mem::take(&mut self.buckets);
@@ -110,13 +131,7 @@ impl PlotData {
                     }
                     self.per_bucket *= 2;
                 }
-                self.buckets.push(Bucket {
-                    t0: r.t,
-                    t1: r.t,
-                    lo: v,
-                    hi: v,
-                    n: 1,
-                });
+                self.buckets.push(Bucket::of(r.t, v));
             }
         }
         if self.seen.is_multiple_of(self.stride) {
@@ -138,7 +153,7 @@ impl PlotData {
                 self.fft.pop_front();
             }
             self.fft
-                .push_back((r.t, r.tip_deflection, r.ball_angle.to_degrees()));
+                .push_back((r.t, 1e3 * r.tip_deflection, r.ball_angle.to_degrees()));
         }
     }
 
@@ -155,6 +170,41 @@ impl PlotData {
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
+    /// Running mean of quantity `i` over `window` seconds, applied twice (centred; a triangular
+    /// kernel of width 2·`window`: a single boxcar leaves a ripple at twice the excitation
+    /// frequency unless the window holds whole periods; twice, its side lobes are squared);
+    /// from the buckets' sums, one point per bucket.
+    fn running_mean(&self, label: &str, i: usize, window: f64) -> Series {
+        let b = &self.buckets;
+        // Prefix sums of (sum, n) over the buckets.
+        let mut cs = vec![(0.0, 0usize); b.len() + 1];
+        for (k, x) in b.iter().enumerate() {
+            cs[k + 1] = (cs[k].0 + x.sum[i], cs[k].1 + x.n);
+        }
+        let mid: Vec<f64> = b.iter().map(|x| 0.5 * (x.t0 + x.t1)).collect();
+        let pts = (0..b.len())
+            .map(|k| {
+                let lo = mid.partition_point(|&t| t < mid[k] - 0.5 * window);
+                let hi = mid.partition_point(|&t| t <= mid[k] + 0.5 * window);
+                let (s, n) = (cs[hi].0 - cs[lo].0, cs[hi].1 - cs[lo].1);
+                (mid[k], if n > 0 { s / n as f64 } else { f64::NAN })
+            })
+            .collect::<Vec<(f64, f64)>>();
+        // The second pass, over the first pass's points (equal weights: equal buckets).
+        let mut c2 = vec![0.0; pts.len() + 1];
+        for (k, p) in pts.iter().enumerate() {
+            c2[k + 1] = c2[k] + p.1;
+        }
+        let pts = (0..pts.len())
+            .map(|k| {
+                let lo = mid.partition_point(|&t| t < mid[k] - 0.5 * window);
+                let hi = mid.partition_point(|&t| t <= mid[k] + 0.5 * window);
+                (mid[k], (c2[hi] - c2[lo]) / (hi - lo).max(1) as f64)
+            })
+            .collect();
+        Series::line(label, pts).width(2)
+    }
+
     fn envelope(&self, label: &str, i: usize, scale: f64) -> Series {
         let mut pts = Vec::with_capacity(2 * self.buckets.len());
         for b in &self.buckets {
@@ -169,8 +219,21 @@ impl PlotData {
         Series::line(label, pts)
     }
 
-    fn phase(&self, f: impl Fn(&Row) -> (f64, f64)) -> Series {
-        Series::line("", self.thin.iter().map(f).collect())
+    /// A phase plane: the transient (t < the transient, grey) and the steady state (t ≥ it,
+    /// in colour) apart.
+    fn phase(&self, f: impl Fn(&Row) -> (f64, f64)) -> Vec<Series> {
+        let t = self.transient;
+        let pick = |steady: bool| -> Vec<(f64, f64)> {
+            self.thin
+                .iter()
+                .filter(|r| (r.t >= t) == steady)
+                .map(&f)
+                .collect()
+        };
+        vec![
+            Series::line(&format!("transient, t < {t} s"), pick(false)).colored(crate::plot::GREY),
+            Series::line(&format!("steady, t ≥ {t} s"), pick(true)).colored(0),
+        ]
     }
 
     /// FFT amplitude of the tip deflection (`ball = false`) or the ball angle in degrees, up to
@@ -238,7 +301,7 @@ pub fn run_plots(
                 let mut p = vec![Panel::new(
                     "Beam tip",
                     "t [s]",
-                    "y [m]",
+                    "y [mm]",
                     vec![
                         data.envelope("deflection (relative)", 0, 1.0),
                         data.envelope("base y_b", 1, 1.0),
@@ -270,7 +333,7 @@ pub fn run_plots(
                 let mut p = vec![Panel::new(
                     &format!("FFT of the beam tip deflection ({t})"),
                     "f [Hz]",
-                    "amplitude [m]",
+                    "amplitude [mm]",
                     vec![Series::line("", tip)],
                 )];
                 if has_ball {
@@ -284,80 +347,76 @@ pub fn run_plots(
                 ("fft", p, (p_len(has_ball), 1), (1200, 800))
             }
             Plot::Phase => {
+                let d = f64::to_degrees;
                 let mut p = vec![Panel::new(
                     "Beam tip y – ẏ",
-                    "y [m]",
-                    "ẏ [m/s]",
-                    vec![data.phase(|r| (r.tip_deflection, r.tip_velocity))],
+                    "y [mm]",
+                    "ẏ [mm/s]",
+                    data.phase(|r| (1e3 * r.tip_deflection, 1e3 * r.tip_velocity)),
                 )];
                 if has_ball {
                     p.push(Panel::new(
                         "Ball θ – θ̇",
-                        "θ [rad]",
-                        "θ̇ [rad/s]",
-                        vec![data.phase(|r| (r.ball_angle, r.ball_rate))],
+                        "θ [deg]",
+                        "θ̇ [deg/s]",
+                        data.phase(|r| (d(r.ball_angle), d(r.ball_rate))),
                     ));
                     p.push(Panel::new(
                         "Ball spin φ – φ̇",
-                        "φ [rad]",
-                        "φ̇ [rad/s]",
-                        vec![data.phase(|r| (r.ball_spin, r.ball_spin_rate))],
+                        "φ [deg]",
+                        "φ̇ [deg/s]",
+                        data.phase(|r| (d(r.ball_spin), d(r.ball_spin_rate))),
                     ));
                     p.push(Panel::new(
                         "Ball θ – tip mass ψ",
-                        "ψ [rad]",
-                        "θ [rad]",
-                        vec![data.phase(|r| (r.tip_angle, r.ball_angle))],
+                        "ψ [deg]",
+                        "θ [deg]",
+                        data.phase(|r| (d(r.tip_angle), d(r.ball_angle))),
                     ));
                     ("phase", p, (2, 2), (1200, 1000))
                 } else {
                     p.push(Panel::new(
                         "Tip mass ψ – ψ̇",
-                        "ψ [rad]",
-                        "ψ̇ [rad/s]",
-                        vec![data.phase(|r| (r.tip_angle, r.tip_rate))],
+                        "ψ [deg]",
+                        "ψ̇ [deg/s]",
+                        data.phase(|r| (d(r.tip_angle), d(r.tip_rate))),
                     ));
                     ("phase", p, (1, 2), (1200, 550))
                 }
             }
             Plot::Energy => {
-                let mj = 1e3;
+                let w = ENERGY_MEAN_WINDOW;
+                let m = |label: &str, i: usize| data.running_mean(label, i, w);
+                let mut transfer = vec![m("beam", 12), m("tip mass", 13)];
+                if has_ball {
+                    transfer.push(m("ball", 14));
+                }
                 let mut p = vec![
                     Panel::new(
-                        "Beam energies",
-                        "t [s]",
-                        "E [mJ = N·mm]",
-                        vec![
-                            data.envelope("strain", 5, mj),
-                            data.envelope("kinetic", 6, mj),
-                            data.envelope("potential Δ", 7, mj),
-                        ],
-                    ),
-                    Panel::new(
-                        "Tip mass energies",
+                        &format!("Energy from rest: beam → ball (running means, 2 × {w} s)"),
                         "t [s]",
                         "E [mJ]",
-                        vec![
-                            data.envelope("kinetic", 8, mj),
-                            data.envelope("potential Δ", 9, mj),
-                        ],
+                        transfer,
+                    ),
+                    Panel::new(
+                        &format!("Beam (running means, 2 × {w} s)"),
+                        "t [s]",
+                        "E [mJ]",
+                        vec![m("strain Δ", 5), m("kinetic", 6), m("potential Δ", 7)],
+                    ),
+                    Panel::new(
+                        &format!("Tip mass (running means, 2 × {w} s)"),
+                        "t [s]",
+                        "E [mJ]",
+                        vec![m("kinetic", 8), m("potential Δ", 9)],
                     ),
                 ];
                 if has_ball {
                     p.push(Panel::new(
-                        "Ball energies",
+                        &format!("Ball (running means, 2 × {w} s)"),
                         "t [s]",
                         "E [mJ]",
-                        vec![
-                            data.envelope("kinetic", 10, mj),
-                            data.envelope("potential Δ", 11, mj),
-                        ],
-                    ));
-                    p.push(Panel::new(
-                        "Kinetic energy: beam vs ball",
-                        "t [s]",
-                        "E [mJ]",
-                        vec![data.envelope("beam", 6, mj), data.envelope("ball", 10, mj)],
+                        vec![m("kinetic", 10), m("potential Δ", 11)],
                     ));
                 }
                 ("energy", p, (2, 2), (1200, 900))

@@ -75,7 +75,67 @@ pub struct Identified {
     /// Why the result is unusable (empty when usable).
     #[serde(default)]
     pub reasons: Vec<String>,
+    /// Each quality figure beside its expected range and a grade ([`Identified::quality`]).
+    #[serde(default)]
+    pub quality: Vec<Quality>,
 }
+
+/// A grade of one quality figure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Grade {
+    /// In the range a good record gives.
+    Ok,
+    /// Usable, but outside that range: treat the number with care.
+    Poor,
+    /// Beyond what a usable result allows.
+    Failed,
+}
+
+impl Grade {
+    /// `ok`, `poor` or `FAILED`, as printed.
+    pub fn word(self) -> &'static str {
+        match self {
+            Self::Ok => "ok",
+            Self::Poor => "poor",
+            Self::Failed => "FAILED",
+        }
+    }
+
+    /// `Ok` up to `ok`, `Poor` up to `usable`, `Failed` beyond (or NaN).
+    pub fn of(value: f64, ok: f64, usable: f64) -> Self {
+        if value <= ok {
+            Self::Ok
+        } else if value <= usable {
+            Self::Poor
+        } else {
+            Self::Failed
+        }
+    }
+}
+
+/// One quality figure: its value, the range expected of a good record, and the grade.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+pub struct Quality {
+    /// What is measured.
+    pub figure: String,
+    /// Its value (in `unit`).
+    pub value: f64,
+    /// Unit of `value`.
+    pub unit: String,
+    /// The range a good record gives, and the limit of a usable one.
+    pub expected: String,
+    /// The grade.
+    pub grade: Grade,
+}
+
+/// Fit residual of a clear mode: 0.002–0.06 of the signal RMS (see [`MAX_RESIDUAL`]).
+pub const OK_RESIDUAL: f64 = 0.06;
+/// Relative 1σ uncertainty of f₁ of a good record: a few per mille.
+pub const OK_F1_UNCERTAINTY: f64 = 0.005;
+/// Relative 1σ uncertainty of ζ of a good record: random decrement scatters by ±20 % at about
+/// 1000 triggers, a clean decay by far less.
+pub const OK_ZETA_UNCERTAINTY: f64 = 0.25;
 
 /// The quality gate's verdict on an identified pole.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
@@ -170,8 +230,57 @@ impl Identified {
         why
     }
 
-    /// Applies [`Identified::check`]: sets the verdict and the reasons.
+    /// The quality figures, each beside its expected range and a grade: the fit residual, the
+    /// relative uncertainties of f₁ and of ζ.
+    pub fn quality(&self) -> Vec<Quality> {
+        let rel_f = self.f1_uncertainty / self.f1;
+        let rel_z = self.zeta_uncertainty / self.zeta;
+        let nan_failed = |g: Grade, v: f64| if v.is_finite() { g } else { Grade::Failed };
+        vec![
+            Quality {
+                figure: "fit residual".into(),
+                value: self.residual_ratio,
+                unit: "of the signal RMS".into(),
+                expected: format!("≤ {OK_RESIDUAL} (a clear mode); usable ≤ {MAX_RESIDUAL}"),
+                grade: nan_failed(
+                    Grade::of(self.residual_ratio, OK_RESIDUAL, MAX_RESIDUAL),
+                    self.residual_ratio,
+                ),
+            },
+            Quality {
+                figure: "f1 uncertainty".into(),
+                value: 100.0 * rel_f,
+                unit: "% (1σ)".into(),
+                expected: format!(
+                    "≤ {} %; usable ≤ {} %",
+                    100.0 * OK_F1_UNCERTAINTY,
+                    100.0 * MAX_F1_UNCERTAINTY
+                ),
+                grade: nan_failed(
+                    Grade::of(rel_f, OK_F1_UNCERTAINTY, MAX_F1_UNCERTAINTY),
+                    rel_f,
+                ),
+            },
+            Quality {
+                figure: "zeta uncertainty".into(),
+                value: 100.0 * rel_z,
+                unit: "% of zeta (1σ)".into(),
+                expected: format!(
+                    "≤ {} % of zeta; usable < 100 %",
+                    100.0 * OK_ZETA_UNCERTAINTY
+                ),
+                grade: if rel_z.is_finite() && rel_z < 1.0 {
+                    Grade::of(rel_z, OK_ZETA_UNCERTAINTY, 1.0)
+                } else {
+                    Grade::Failed
+                },
+            },
+        ]
+    }
+
+    /// Applies [`Identified::check`]: sets the verdict, the reasons and the quality figures.
     pub fn gate(mut self, band: Option<(f64, f64)>) -> Self {
+        self.quality = self.quality();
         self.reasons = self.check(band);
         self.verdict = if self.reasons.is_empty() {
             Verdict::Usable
@@ -652,6 +761,7 @@ fn fit_pole(
                 residual_ratio: all.residual_ratio,
                 verdict: Verdict::Unusable,
                 reasons: Vec::new(),
+                quality: Vec::new(),
             })
         }
         RecordKind::Ambient => {
@@ -704,6 +814,7 @@ fn fit_pole(
                 residual_ratio: all.residual_ratio,
                 verdict: Verdict::Unusable,
                 reasons: Vec::new(),
+                quality: Vec::new(),
             })
         }
     }

@@ -475,3 +475,24 @@ pub fn atomic_with(path: &Path, produce: impl FnOnce(&Path) -> Result<()>) -> Re
         .map_err(|e| anyhow!("cannot write `{}`: {}", path.display(), e.error))?;
     Ok(())
 }
+
+/// How messages spell an option: `--name` for the command line (the default), `name=` for
+/// the Python package ([`spell_options_for_python`]), whose keyword arguments mirror the
+/// options.
+static PYTHON_SPELLING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Messages name options as Python keyword arguments (`transient=`) from now on in this
+/// process (the Python package calls it on import).
+pub fn spell_options_for_python() {
+    PYTHON_SPELLING.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// The option `name` (without dashes) as messages spell it: `--name`, or `name=` in the
+/// Python package.
+pub fn option(name: &str) -> String {
+    if PYTHON_SPELLING.load(std::sync::atomic::Ordering::Relaxed) {
+        format!("{}=", name.replace('-', "_"))
+    } else {
+        format!("--{name}")
+    }
+}

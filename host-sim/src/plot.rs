@@ -30,6 +30,10 @@ pub struct Series {
     pub markers: bool,
     /// Fixed palette index (one colour per scene across panels); default: the position.
     pub color: Option<usize>,
+    /// Dashed line (to tell an estimate or a reference from the truth when they overlap).
+    pub dashed: bool,
+    /// Line width in pixels (default 1).
+    pub width: u32,
 }
 
 impl Series {
@@ -40,6 +44,8 @@ impl Series {
             points,
             markers: false,
             color: None,
+            dashed: false,
+            width: 1,
         }
     }
     /// Line with markers.
@@ -49,7 +55,19 @@ impl Series {
             points,
             markers: true,
             color: None,
+            dashed: false,
+            width: 1,
         }
+    }
+    /// Drawn dashed.
+    pub fn dashed(mut self) -> Self {
+        self.dashed = true;
+        self
+    }
+    /// Drawn `w` pixels wide.
+    pub fn width(mut self, w: u32) -> Self {
+        self.width = w.max(1);
+        self
     }
     /// The same curve in palette colour `i` (the same scene in the same colour on every panel).
     pub fn colored(mut self, i: usize) -> Self {
@@ -92,13 +110,17 @@ impl Panel {
     }
 }
 
-const COLORS: [RGBColor; 6] = [
+/// Palette index of the light grey [`COLORS`] ends with (a transient, a background curve).
+pub const GREY: usize = 6;
+
+const COLORS: [RGBColor; 7] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(255, 127, 14),
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
+    RGBColor(175, 175, 175),
 ];
 
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -146,8 +168,10 @@ fn draw(
     let err = |e: &dyn std::fmt::Display| anyhow!("{e}");
     let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
+    // A long title shrinks to fit the width (about 0.55 em per character).
+    let title_size = 22.0f64.min(size.0 as f64 / (0.55 * title.chars().count().max(1) as f64));
     let root = root
-        .titled(title, (FONT, 22).into_font().style(FontStyle::Bold))
+        .titled(title, (FONT, title_size).into_font().style(FontStyle::Bold))
         .map_err(|e| err(&e))?;
     let areas = root.split_evenly((rows, cols));
     for (panel, area) in panels.iter().zip(areas.iter()) {
@@ -177,8 +201,8 @@ fn draw(
             .y_desc(panel.y.as_str())
             .label_style((FONT, 12))
             .axis_desc_style((FONT, 13))
-            .y_label_formatter(&|v| format_tick(*v))
-            .x_label_formatter(&|v| format_tick(*v))
+            .y_label_formatter(&tick_format(y0, y1))
+            .x_label_formatter(&tick_format(x0, x1))
             .draw()
             .map_err(|e| err(&e))?;
         let mut legend = false;
@@ -190,13 +214,25 @@ fn draw(
                 .copied()
                 .filter(|p| p.0.is_finite() && p.1.is_finite())
                 .collect();
-            let anno = chart
-                .draw_series(LineSeries::new(pts.clone(), color.stroke_width(1)))
-                .map_err(|e| err(&e))?;
+            let style = color.stroke_width(s.width);
+            let anno = if s.dashed {
+                chart
+                    .draw_series(DashedLineSeries::new(pts.clone(), 6, 4, style))
+                    .map_err(|e| err(&e))?
+            } else {
+                chart
+                    .draw_series(LineSeries::new(pts.clone(), style))
+                    .map_err(|e| err(&e))?
+            };
             if !s.label.is_empty() {
                 legend = true;
+                let (dashed, w) = (s.dashed, s.width + 1);
                 anno.label(s.label.as_str()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                    // Relative to (x, y): a gap in the middle for a dashed curve.
+                    let mid = if dashed { 11 } else { 6 };
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (6, 0)], color.stroke_width(w))
+                        + PathElement::new(vec![(mid, 0), (18, 0)], color.stroke_width(w))
                 });
             }
             if s.markers {
@@ -236,15 +272,26 @@ fn draw(
     Ok(())
 }
 
-fn format_tick(v: f64) -> String {
-    let a = v.abs();
-    // Ticks at zero come out as ±1e-16 from the axis arithmetic.
-    if a < 1e-12 {
-        "0".into()
-    } else if !(1e-3..1e4).contains(&a) {
-        format!("{v:.2e}")
+/// One tick format per axis: fixed-point with as many decimals as the axis span needs (a
+/// tenth of the span resolved: every tick of an axis has the same number of decimals), or,
+/// where the values are beyond 10⁵ or the span below 10⁻⁴, scientific with 3 digits.
+pub fn tick_format(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
+    let span = (hi - lo).abs();
+    let mag = lo.abs().max(hi.abs());
+    let sci = mag >= 1e5 || span < 1e-4;
+    let decimals = if span > 0.0 {
+        (-(span / 10.0).log10()).ceil().clamp(0.0, 6.0) as usize
     } else {
-        let s = format!("{v:.4}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
+        2
+    };
+    move |v: &f64| {
+        // Ticks at zero come out as ±1e-16 from the axis arithmetic.
+        if v.abs() <= 1e-9 * span {
+            "0".into()
+        } else if sci {
+            format!("{v:.2e}")
+        } else {
+            format!("{v:.decimals$}")
+        }
     }
 }

@@ -116,6 +116,9 @@ pub struct Row {
     pub tangential_force: f64,
     /// 1: the ball is on the track, 0: in flight (NaN without a free ball).
     pub contact: f64,
+    /// Absolute vertical acceleration of the beam end, ÿ_b + the relative acceleration
+    /// \[m/s²\] (gravity not included: what a tip accelerometer reads).
+    pub tip_acceleration: f64,
     /// The ball left the track during the step (not a CSV column).
     pub separated: bool,
     /// A landing during the step: `(bounced, required friction |P_t|/P_n)` (not a CSV column).
@@ -138,8 +141,9 @@ pub const CSV_HEADER: &str = "\
 # ball_spin: phi = psi - (rho/r_b)(theta - psi) [rad]; ball_spin_rate [rad/s];
 # normal_force: track on ball, towards the track centre [N] (< 0: the track pulls: a real ball would leave it);
 # tangential_force: track on ball along increasing theta [N] (friction rolling needs; plus a stop's reaction);
-# contact: 1 the ball is on the track, 0 it flies inside the housing (then ball_angle is the polar angle of its centre)
-t,base_y,tip_y,tip_deflection,tip_angle,ball_angle,ball_rel_angle,beam_strain,beam_kinetic,beam_potential,tip_kinetic,tip_potential,ball_kinetic,ball_potential,iterations,impact,base_accel,tip_velocity,tip_rate,ball_rate,ball_rel_rate,ball_spin,ball_spin_rate,normal_force,tangential_force,contact";
+# contact: 1 the ball is on the track, 0 it flies inside the housing (then ball_angle is the polar angle of its centre);
+# tip_acceleration: absolute vertical acceleration of the beam end, base_accel + relative [m/s^2] (what a tip accelerometer reads, gravity not included)
+t,base_y,tip_y,tip_deflection,tip_angle,ball_angle,ball_rel_angle,beam_strain,beam_kinetic,beam_potential,tip_kinetic,tip_potential,ball_kinetic,ball_potential,iterations,impact,base_accel,tip_velocity,tip_rate,ball_rate,ball_rel_rate,ball_spin,ball_spin_rate,normal_force,tangential_force,contact,tip_acceleration";
 
 /// Names of the CSV columns, in order (the last line of [`CSV_HEADER`]).
 pub fn csv_columns() -> Vec<&'static str> {
@@ -153,7 +157,7 @@ pub fn csv_columns() -> Vec<&'static str> {
 
 impl Row {
     /// The row's values in the order of [`csv_columns`] (`iterations` and `impact` as numbers).
-    pub fn values(&self) -> [f64; 26] {
+    pub fn values(&self) -> [f64; 27] {
         let e = &self.energies;
         [
             self.t,
@@ -182,6 +186,7 @@ impl Row {
             self.normal_force,
             self.tangential_force,
             self.contact,
+            self.tip_acceleration,
         ]
     }
 
@@ -189,7 +194,7 @@ impl Row {
     /// integers, `contact` as 0 or 1 (or NaN), everything else with 10 significant digits in
     /// Rust's `{:.9e}` form, byte for byte (`push_sci10`, checked against `format!`).
     pub fn csv(&self) -> String {
-        let mut b = Vec::with_capacity(26 * 17);
+        let mut b = Vec::with_capacity(27 * 17);
         self.write_csv(&mut b);
         // (ASCII only: the conversion cannot fail.)
         String::from_utf8(b).unwrap_or_default()
@@ -413,6 +418,7 @@ pub fn simulate_with(
             normal_force: contact.map_or(f64::NAN, |c| c.0),
             tangential_force: contact.map_or(f64::NAN, |c| c.1),
             contact: contact.map_or(f64::NAN, |_| if sim.in_flight() { 0.0 } else { 1.0 }),
+            tip_acceleration: b.accel + o.tip_acceleration,
             separated: report.is_some_and(|r| r.separation.is_some()),
             landing: report
                 .and_then(|r| r.landing)
@@ -460,6 +466,14 @@ pub fn run_rows(scene: &Scene, progress: impl FnMut(usize)) -> Result<Vec<Row>> 
         .map_err(|_| anyhow!("a run of {steps} steps does not fit in memory here"))?;
     simulate(scene, &exc, steps, |r| rows.push(*r), progress)?;
     Ok(rows)
+}
+
+/// The one definition of "steady" of `paper`, `run`, `sweep` and `fatigue`: every sample with
+/// t ≥ `from` (the transient `outputs.transient`, 20 s by default, or `sweep --last`'s start),
+/// to the end of the run; every steady figure of a table row is over this window. The label
+/// their tables and JSON carry.
+pub fn steady_label(from: f64) -> String {
+    format!("steady: t ≥ {from} s to the end")
 }
 
 /// Summary figures of a run, accumulated row by row in fixed memory.

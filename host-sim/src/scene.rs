@@ -350,6 +350,10 @@ pub struct ExcitationSection {
     /// CSV file of `t, accel` (csv), relative to the scene file.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub file: Option<PathBuf>,
+    /// High-pass corner of the record's baseline correction \[Hz\] (csv; default 0.1 Hz,
+    /// `excitation::HIGHPASS_CORNER`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub highpass: Option<f64>,
 }
 
 /// `[outputs]`.
@@ -943,6 +947,7 @@ impl Default for ExcitationSection {
             amplitude: Some(0.5e-3),
             frequency: Some(4.13),
             file: None,
+            highpass: None,
         }
     }
 }
@@ -954,6 +959,7 @@ impl ExcitationSection {
             amplitude: None,
             frequency: None,
             file: None,
+            highpass: None,
         }
     }
     /// Amplitude \[m\] (paper 0.5 mm when not given).
@@ -1421,7 +1427,7 @@ impl Scene {
             }
         }
         if f.arm.is_some() || !f.loads.is_empty() {
-            w.push("warning: `[arm]`, `[[loads]]` and `[[sensors]]` are used by `estimate` and `tune`; the other commands model the uniform `[beam]` shaken at its base".into());
+            w.push("warning: `[arm]`, `[[loads]]` and `[[sensors]]` are used by `estimate`, `tune`, `modes` and `static`; the other commands (`run`, `sweep`, `fatigue`) model the uniform `[beam]` shaken at its base".into());
         }
         w
     }

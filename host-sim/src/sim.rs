@@ -12,6 +12,8 @@ pub struct Observation {
     pub tip_deflection: f64,
     /// Its rate \[m/s\].
     pub tip_velocity: f64,
+    /// Its acceleration relative to the base \[m/s²\] (the integrator's `a` at the step's end).
+    pub tip_acceleration: f64,
     /// Tip mass rotation ψ \[rad\].
     pub tip_angle: f64,
     /// ψ̇ \[rad/s\].

@@ -1,5 +1,5 @@
 //! Frequency-response sweep (paper Fig. 10): one run per excitation frequency, in parallel,
-//! steady-state amplitudes over the last part of each run.
+//! every figure over the steady window (t ≥ the transient to the end, as `run`), or the last part.
 
 use crate::ensemble::Ensemble;
 use crate::excitation::Excitation;
@@ -27,26 +27,28 @@ pub struct SweepPoint {
     pub ball_max_deg: f64,
     /// Half peak-to-peak of θ over the window \[deg\].
     pub ball_amplitude_deg: f64,
-    /// Stop impacts over the whole run.
+    /// Stop impacts over the window.
     pub impacts: u32,
     /// Fraction of the window with the ball in flight \[-\] (0 without a free ball).
     pub flight_fraction: f64,
-    /// Largest Newton iteration count of a step.
+    /// Largest Newton iteration count of a step over the window.
     pub max_iterations: u32,
     /// Why the run failed (then the figures above cover only what was computed and are not
     /// reported by the commands).
     pub error: Option<String>,
 }
 
-/// Runs the sweep. `last`: the window length at the end of each run \[s\]; `progress(steps)`
+/// Runs the sweep. `from`: the steady window's start \[s\] (every figure of a point is over
+/// t ≥ `from` to the end; `commands::sweep::window` gives the default, the window of `run` and
+/// `paper`); `progress(steps)`
 /// is called (from worker threads) with step increments.
 pub fn sweep(
     scene: &Scene,
     frequencies: &[f64],
-    last: f64,
+    from: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<SweepPoint>> {
-    let members = sweep_members(scene, frequencies, last, Ensemble::single(), progress)?;
+    let members = sweep_members(scene, frequencies, from, Ensemble::single(), progress)?;
     Ok(members.into_iter().flatten().collect())
 }
 
@@ -55,7 +57,7 @@ pub fn sweep(
 pub fn sweep_members(
     scene: &Scene,
     frequencies: &[f64],
-    last: f64,
+    from: f64,
     e: Ensemble,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Vec<SweepPoint>>> {
@@ -80,7 +82,7 @@ pub fn sweep_members(
             point(
                 &crate::ensemble::member_scene(scene, e.seed, m),
                 f,
-                last,
+                from,
                 progress,
             )
         })
@@ -89,11 +91,12 @@ pub fn sweep_members(
 }
 
 /// One run of the sweep at `f` \[Hz\].
-fn point(scene: &Scene, f: f64, last: f64, progress: &(dyn Fn(u64) + Sync)) -> SweepPoint {
+fn point(scene: &Scene, f: f64, from: f64, progress: &(dyn Fn(u64) + Sync)) -> SweepPoint {
     let amplitude = scene.file.excitation.amplitude_or_paper();
     let steps = scene.steps();
     let h = scene.file.integrator.step;
-    let from = (scene.file.duration - last).max(0.0);
+    // The window of `run::RunStats`: the same slack at its start.
+    let eps = 1e-9 * (steps as f64 * h).max(1.0);
     let exc = Excitation::harmonic(amplitude, f, h);
     let (mut lo, mut hi, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
     let (mut blo, mut bhi, mut bmax) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
@@ -105,9 +108,9 @@ fn point(scene: &Scene, f: f64, last: f64, progress: &(dyn Fn(u64) + Sync)) -> S
         &exc,
         steps,
         |r| {
-            impacts += u32::from(r.events.impacts);
-            max_it = max_it.max(r.iterations);
-            if r.t >= from - 1e-9 {
+            if r.t >= from - eps {
+                impacts += u32::from(r.events.impacts);
+                max_it = max_it.max(r.iterations);
                 lo = lo.min(r.tip_deflection);
                 hi = hi.max(r.tip_deflection);
                 sum += r.tip_deflection;
@@ -180,8 +183,8 @@ impl SweepPoint {
 }
 
 /// CSV of a sweep. A failed point has status `failed`, no numbers and the error.
-pub fn csv(points: &[SweepPoint]) -> String {
-    let mut s = String::from(CSV_HEAD);
+pub fn csv(points: &[SweepPoint], steady_from: f64) -> String {
+    let mut s = csv_head(steady_from);
     for p in points {
         s.push_str(&csv_row(p));
     }
@@ -190,12 +193,12 @@ pub fn csv(points: &[SweepPoint]) -> String {
 
 /// CSV of an ensemble's sweep: one row per run, the member first (0: the scene itself), then
 /// the columns of [`csv`].
-pub fn csv_members(points: &[Vec<SweepPoint>], e: Ensemble) -> String {
+pub fn csv_members(points: &[Vec<SweepPoint>], e: Ensemble, steady_from: f64) -> String {
     let mut s = format!(
         "# ensemble of {} runs per frequency, seed {} (member 0: the scene itself)\n",
         e.k, e.seed
     );
-    for line in CSV_HEAD.lines() {
+    for line in csv_head(steady_from).lines() {
         if line.starts_with('#') {
             s.push_str(line);
         } else {
@@ -213,8 +216,14 @@ pub fn csv_members(points: &[Vec<SweepPoint>], e: Ensemble) -> String {
 }
 
 /// The header of [`csv`].
-const CSV_HEAD: &str = "# host-sim sweep: steady-state amplitudes over the last part of each run\n\
-         # frequency [Hz]; status: ok, or failed (then no numbers; error says why); tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
+fn csv_head(steady_from: f64) -> String {
+    format!(
+        "# host-sim sweep: every column over the steady window, {} of each run\n{CSV_COLUMNS}",
+        crate::run::steady_label(steady_from)
+    )
+}
+
+const CSV_COLUMNS: &str = "# frequency [Hz]; status: ok, or failed (then no numbers; error says why); tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
          # ball_max_deg: max |theta| [deg]; ball_amplitude_deg: half peak-to-peak theta [deg]; impacts;\n\
          # flight_fraction: share of the window with the ball in flight [-]; max_iterations; error\n\
          frequency,status,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,flight_fraction,max_iterations,error\n";

@@ -125,8 +125,12 @@ pub struct ArmTuning {
     pub buildable_in_signal_head: bool,
 }
 
+/// Elements of the full solver that `static`, `modes` and `tune` use for a scene with an
+/// `[arm]` (the tapered tube with its heads; converged: also `estimate`'s reference).
+pub const ARM_ELEMENTS: usize = 16;
+
 /// Track radius for a ball at `ratio` × the arm's first frequency (the fixed-housing rolling
-/// pendulum of MODEL.md, `f = √(m_b g ρ / J_θ) / 2π`, solved for ρ): the ball's own mass
+/// pendulum of docs/model.md, `f = √(m_b g ρ / J_θ) / 2π`, solved for ρ): the ball's own mass
 /// hardly shifts the arm's mode at this scale, so the fixed-housing formula is the tuning.
 pub fn arm_track_radius(scene: &Scene, ratio: f64) -> Result<ArmTuning> {
     let arm = scene
@@ -136,9 +140,14 @@ pub fn arm_track_radius(scene: &Scene, ratio: f64) -> Result<ArmTuning> {
         .ok_or_else(|| anyhow!("the scene has no `[arm]`"))?;
     let p = scene.params()?;
     let a = arm.params()?;
-    let full =
-        crate::full::FullSolver::arm_at_rest(p, crate::full::SceneKind::BeamOnly, 16, &a, 0.0)
-            .map_err(|e| anyhow!("{e}"))?;
+    let full = crate::full::FullSolver::arm_at_rest(
+        p,
+        crate::full::SceneKind::BeamOnly,
+        ARM_ELEMENTS,
+        &a,
+        0.0,
+    )
+    .map_err(|e| anyhow!("{e}"))?;
     let f1 = *full
         .frequencies()
         .map_err(|e| anyhow!("{e}"))?

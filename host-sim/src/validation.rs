@@ -203,6 +203,7 @@ pub fn write(
         if let Some(r) = r {
             s.file.ball.track_radius = r;
         }
+        // The steady window: t ≥ 20 s to the end (as `paper`, `run`, `sweep`).
         sweep(&s, &PAPER_FREQUENCIES, 20.0, &none)
     };
     let table1 = sweep_of(Kind::Free, 3, None)?;
@@ -228,7 +229,7 @@ pub fn write(
         n3: format!("{} (tuned R: {})", fmt_onset(o3), fmt_onset(ot)),
         converged: fmt_onset(oc),
         verdict: if near(o3) || near(ot) { "reproduced" } else { "not reproduced" },
-        reason: "Onset = lowest sweep frequency with a steady ball amplitude above 10° (last 20 s of 60 s). \
+        reason: "Onset = lowest sweep frequency with a steady ball amplitude above 10° (t ≥ 20 s of 60 s, the steady window of `paper` and `sweep`). \
                  Where the ball reaches the ±65° stops its steady state depends on the stop model (restitution \
                  e = 0.5, not given in the paper)."
             .into(),
@@ -544,7 +545,7 @@ pub fn write(
         )?;
     }
     writeln!(md)?;
-    writeln!(md, "Steady-state amplitudes: half the peak-to-peak over the last 20 s of 60 s runs. The tuned scene has R = {:.4} m (ball at half the beam's first frequency in the coupled linearized model). The ball may leave the track where the track would have to pull it (docs/model.md, \"Contact and flight\"); \"ball in flight\" is the share of the last 20 s it spent in the air, and \"bilateral track\" the same run with the ball held on the track by any force (`ball.flight = false`, the paper's model).", tuned.track_radius)?;
+    writeln!(md, "Steady-state amplitudes: half the peak-to-peak over t ≥ 20 s of 60 s runs (the steady window of `paper`, `run` and `sweep`). The tuned scene has R = {:.4} m (ball at half the beam's first frequency in the coupled linearized model). The ball may leave the track where the track would have to pull it (docs/model.md, \"Contact and flight\"); \"ball in flight\" is the share of that window it spent in the air, and \"bilateral track\" the same run with the ball held on the track by any force (`ball.flight = false`, the paper's model).", tuned.track_radius)?;
     writeln!(md)?;
     writeln!(md, "## 4.13 Hz: energy transfer (Figs. 16–21)")?;
     writeln!(md)?;

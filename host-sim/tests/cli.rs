@@ -99,9 +99,9 @@ fn csv_excitation_errors() {
 }
 
 #[test]
-fn csv_excitation_resamples_and_integrates() {
-    // ÿ = −A Ω² sin Ωt over whole periods, sampled at 1 ms, resampled to 0.5 ms: with zero-mean
-    // integration constants, ẏ = A Ω cos Ωt and y = A sin Ωt.
+fn csv_excitation_resamples() {
+    // ÿ = −A Ω² sin Ωt over whole periods, sampled at 1 ms, reduced to the 0.5 ms grid (the
+    // record before its baseline correction; the correction's own tests are in excitation.rs).
     let (a, w) = (1e-3, std::f64::consts::TAU * 2.0);
     let mut text = String::from("# measured\nt,accel\n");
     for k in 0..=2000 {
@@ -110,21 +110,14 @@ fn csv_excitation_resamples_and_integrates() {
     }
     let h = 5e-4;
     let e = Excitation::from_csv_text(&text, h, Some(4000)).unwrap();
+    let rec = e.recorded().unwrap();
+    assert_eq!(rec.len(), 4001);
     for k in [0, 1000, 3000, 3999] {
-        let b = e.at(k);
         let t = k as f64 * h;
-        assert!(
-            (b.displacement - a * (w * t).sin()).abs() < 1e-3 * a,
-            "y({t}) = {}",
-            b.displacement
-        );
-        assert!(
-            (b.velocity - a * w * (w * t).cos()).abs() < 1e-3 * a * w,
-            "v({t}) = {}",
-            b.velocity
-        );
-        assert!((b.accel + a * w * w * (w * t).sin()).abs() < 1e-3 * a * w * w);
+        assert!((rec[k] + a * w * w * (w * t).sin()).abs() < 1e-3 * a * w * w);
     }
+    // The base starts at rest.
+    assert_eq!((e.at(0).velocity, e.at(0).displacement), (0.0, 0.0));
 }
 
 #[test]

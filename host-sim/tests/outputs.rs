@@ -372,7 +372,13 @@ fn failed_points_have_no_numbers() {
         error: Some("step 7 (t = 0.021 s) failed: the solver did not converge".into()),
         ..ok.clone()
     };
-    let csv = host_sim::sweep::csv(&[ok, bad]);
+    let csv = host_sim::sweep::csv(&[ok, bad], 20.0);
+    assert!(
+        csv.starts_with(
+            "# host-sim sweep: every column over the steady window, steady: t ≥ 20 s to the end"
+        ),
+        "{csv}"
+    );
     let rows: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
     assert!(rows[0].starts_with("frequency,status,"));
     assert!(rows[1].starts_with("4,ok,1.000000e-2,"));
@@ -428,8 +434,9 @@ fn a_spike_between_grid_points_is_kept_by_averaging_and_warned_about() {
         text.push_str(&format!("{t},{a}\n"));
     }
     let (e, warnings) = Excitation::from_csv_checked(&text, h, Some(90)).unwrap();
-    let accel: Vec<f64> = (0..=90).map(|k| e.at(k).accel).collect();
-    // Trapezoid over the grid = what the solver integrates: the spike's full 0.05 m/s.
+    // The record reduced to the grid (before the baseline correction): trapezoid over the grid
+    // = what the solver integrates, the spike's full 0.05 m/s.
+    let accel = e.recorded().unwrap().to_vec();
     let dv: f64 = accel.windows(2).map(|w| 0.5 * h * (w[0] + w[1])).sum();
     assert!((dv - 0.05).abs() < 1e-9, "velocity change {dv}");
     assert!(accel.iter().any(|&a| a > 1.0));
@@ -437,13 +444,16 @@ fn a_spike_between_grid_points_is_kept_by_averaging_and_warned_about() {
         warnings.iter().any(|w| w.contains("faster than the step")),
         "{warnings:?}"
     );
-    // A smooth record gives no warning, and the BOM is accepted.
+    // A smooth record of a base that starts and ends at rest (y = sin⁴(πt/T), T = 0.3 s: the
+    // baseline correction leaves it) gives no warning, and the BOM is accepted.
     let mut text = String::from("\u{feff}t,accel\n");
+    let w = std::f64::consts::PI / 0.3;
     for k in 0..=300 {
         let t = k as f64 * 1e-3;
+        let (s, c) = (w * t).sin_cos();
         text.push_str(&format!(
             "{t},{}\n",
-            (std::f64::consts::TAU * 2.0 * t).sin()
+            w * w * (12.0 * s * s * c * c - 4.0 * s.powi(4))
         ));
     }
     let (_, warnings) = Excitation::from_csv_checked(&text, h, Some(90)).unwrap();
@@ -571,6 +581,7 @@ fn plot_buffers_stay_bounded_on_long_runs() {
         normal_force: f64::NAN,
         tangential_force: f64::NAN,
         contact: f64::NAN,
+        tip_acceleration: 0.0,
         separated: false,
         landing: None,
         events: Default::default(),

@@ -100,7 +100,9 @@ def run(
         [rad], the energies ``beam_strain`` … ``ball_potential`` [J], ``iterations``,
         ``impact`` (0/1), ``base_accel`` [m/s²], ``tip_velocity`` [m/s], ``tip_rate``,
         ``ball_rate``, ``ball_rel_rate`` [rad/s], ``ball_spin`` [rad], ``ball_spin_rate``
-        [rad/s]; and ``"summary"``: the dict ``host-sim run --json`` prints as ``summary``
+        [rad/s], ``normal_force`` and ``tangential_force`` (the track's force on the ball) [N],
+        ``contact`` (1 on the track, 0 in flight; NaN without a free ball),
+        ``tip_acceleration`` (absolute, what a tip accelerometer reads) [m/s²]; and ``"summary"``: the dict ``host-sim run --json`` prints as ``summary``
         (static tip deflection, amplitudes, impacts, mean energies).
 
     Raises:
@@ -144,20 +146,22 @@ def sweep(
     scene: SceneLike = "paper",
     freqs: Optional[Sequence[float]] = None,
     *,
-    last: float = 20.0,
+    last: Optional[float] = None,
     jobs: Optional[int] = None,
     ensemble: int = 1,
     seed: int = 1,
     **overrides: Any,
 ) -> Dict[str, Any]:
     """Frequency response, as ``host-sim sweep``: one run per excitation frequency, in parallel
-    on ``jobs`` threads (default: all cores; the GIL is released), steady-state amplitudes over
-    the ``last`` seconds of each run.
+    on ``jobs`` threads (default: all cores; the GIL is released), every figure over the steady
+    window: the run after its transient (``outputs.transient``, 20 s; the window of :func:`run`),
+    or the ``last`` seconds of each run.
 
     Args:
         scene: built-in name, TOML path or dict (must have a harmonic excitation).
         freqs: excitation frequencies [Hz] (default: the paper's 14, 3.50 … 4.70).
-        last: steady-state window at the end of each run [s].
+        last: steady-state window at the end of each run [s] (default: the run after
+            ``outputs.transient``).
         jobs: worker threads.
         ensemble: runs per frequency from seeded perturbations of the ball's initial state
             (``--ensemble``): the arrays are then the means over the members, and
@@ -168,7 +172,8 @@ def sweep(
     Returns:
         A dict of ``numpy.ndarray`` (one entry per frequency): ``frequency`` [Hz],
         ``tip_amplitude`` (half peak-to-peak) [m], ``tip_mean`` [m], ``ball_max_deg``,
-        ``ball_amplitude_deg`` [deg], ``impacts``, ``max_iterations``; and ``"errors"``: a list
+        ``ball_amplitude_deg`` [deg], ``impacts``, ``flight_fraction`` (share of the window with
+        the ball in flight) [-], ``max_iterations``; and ``"errors"``: a list
         with ``None`` for a point that ran, else why it failed (its numbers are then NaN).
 
     Raises:
@@ -176,9 +181,16 @@ def sweep(
     """
     f = None if freqs is None else [float(x) for x in np.asarray(freqs, dtype=float).ravel()]
     points = json.loads(_absorber.sweep(_scene(scene), overrides, f, last, jobs, ensemble, seed))
-    keys = ("frequency", "tip_amplitude", "tip_mean", "ball_max_deg", "ball_amplitude_deg")
+    keys = (
+        "frequency",
+        "tip_amplitude",
+        "tip_mean",
+        "ball_max_deg",
+        "ball_amplitude_deg",
+        "flight_fraction",
+    )
     if ensemble > 1:
-        stats = keys[1:] + ("impacts", "flight_fraction", "max_iterations")
+        stats = keys[1:] + ("impacts", "max_iterations")
 
         def field(p: Dict[str, Any], k: str, f: str) -> float:
             return np.nan if p["error"] or p[k] is None else p[k][f]

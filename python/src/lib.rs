@@ -29,7 +29,10 @@ create_exception!(
 fn field_of(message: &str) -> Option<String> {
     let mut parts = message.split('`');
     parts.next()?;
-    parts.next().map(str::to_string)
+    // A keyword argument is spelled `name=` in the messages; its field is `name`.
+    parts
+        .next()
+        .map(|f| f.strip_suffix('=').unwrap_or(f).to_string())
 }
 
 /// An `AbsorberError` with its `field` attribute set from the message.
@@ -293,14 +296,14 @@ fn modes<'py>(
 /// `sweep`: the points as JSON (one object per frequency, `error` set on a failed one); with
 /// `ensemble` > 1 every number is `{"mean", "sd", "min", "max", "k"}` over the members.
 #[pyfunction]
-#[pyo3(signature = (scene, overrides=None, freqs=None, last=20.0, jobs=None, ensemble=1, seed=1))]
+#[pyo3(signature = (scene, overrides=None, freqs=None, last=None, jobs=None, ensemble=1, seed=1))]
 #[allow(clippy::too_many_arguments)]
 fn sweep(
     py: Python<'_>,
     scene: &Bound<'_, PyAny>,
     overrides: Option<&Bound<'_, PyDict>>,
     freqs: Option<Vec<f64>>,
-    last: f64,
+    last: Option<f64>,
     jobs: Option<usize>,
     ensemble: usize,
     seed: u64,
@@ -338,6 +341,8 @@ fn scene_toml(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -
 
 #[pymodule]
 fn _absorber(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Messages name options as this package's keyword arguments (`transient=`, `last=`).
+    host_sim::output::spell_options_for_python();
     m.add("AbsorberError", m.py().get_type::<AbsorberError>())?;
     m.add("CSV_COLUMNS", host_sim::run::csv_columns())?;
     m.add("BUILT_IN_SCENES", host_sim::scene::BUILT_IN.to_vec())?;

@@ -132,7 +132,7 @@ def test_sweep_equals_the_cli_sweep(tmp_path):
         (lambda: absorber.run("paper", kind="pendulum"), "kind"),
         (lambda: absorber.run("paper", stiffness=1.0), "stiffness"),
         (lambda: absorber.run({"beam": {"length": "long"}}), "beam.length"),
-        (lambda: absorber.sweep("paper", [4.0], last=100.0), "--last"),
+        (lambda: absorber.sweep("paper", [4.0], last=100.0), "last"),
     ],
 )
 def test_a_bad_parameter_raises_with_the_name_of_its_field(call, field):
@@ -145,3 +145,26 @@ def test_a_bad_parameter_raises_with_the_name_of_its_field(call, field):
 def test_a_missing_scene_file_raises_naming_it(tmp_path):
     with pytest.raises(absorber.AbsorberError, match="nope.toml"):
         absorber.run(str(tmp_path / "nope.toml"))
+
+
+def test_run_doc_lists_every_output_column():
+    # The docstring is checked against the command line's own column list.
+    missing = [c for c in absorber.CSV_COLUMNS if f"``{c}``" not in absorber.run.__doc__]
+    assert missing == [], missing
+    assert "tip_acceleration" in absorber.CSV_COLUMNS
+
+
+def test_messages_name_keyword_arguments_not_options():
+    with pytest.raises(absorber.AbsorberError) as e:
+        absorber.run("paper", duration=2.0, transient=5.0)
+    assert "transient=" in str(e.value) and "--" not in str(e.value), str(e.value)
+    assert e.value.field == "transient"
+
+
+def test_sweep_returns_the_flight_fraction_over_the_window():
+    # Default window: t >= outputs.transient (20 s), as run's summary.
+    s = absorber.sweep("paper", [4.13], duration=24.0)
+    r = absorber.run("paper", duration=24.0)
+    c = r["summary"]["contact"]
+    assert s["flight_fraction"][0] == pytest.approx(c["flight_fraction_steady"], abs=1e-3)
+    assert s["tip_amplitude"][0] == r["summary"]["tip_amplitude_steady"]

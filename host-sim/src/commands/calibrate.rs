@@ -283,6 +283,16 @@ pub fn identify(a: &IdentifyArgs) -> Result<()> {
                 String::new()
             }
         );
+        for q in &id.quality {
+            println!(
+                "{:<17} {:>8.3} {:<18} expected {:<40} {}",
+                q.figure,
+                q.value,
+                q.unit,
+                q.expected,
+                q.grade.word()
+            );
+        }
         match id.verdict {
             Verdict::Usable => println!("verdict: usable"),
             Verdict::Unusable => println!("verdict: UNUSABLE"),

@@ -100,7 +100,14 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
     };
     let (report, series) = crate::estimate::twin(&scene, duration, baseline)?;
     if let Some(mut dir) = out.take() {
-        write_files(&mut dir, &report, &series)?;
+        // The S–N threshold of the arm's detail (constant-amplitude fatigue threshold) [MPa].
+        let threshold = scene
+            .file
+            .arm
+            .as_ref()
+            .and_then(|a| a.detail_category().ok())
+            .map(|d| (d.name(), d.threshold_ksi() * 6.894_757));
+        write_files(&mut dir, &report, &series, threshold)?;
         dir.commit(Status::Complete, serde_json::to_value(&report)?)?;
     }
     if a.json {
@@ -285,8 +292,21 @@ fn write_lab_files(dir: &mut OutputDir, r: &LabReport, s: &LabSeries) -> Result<
                 "t [s]",
                 "root stress [MPa]",
                 vec![
-                    Series::line(truth_label, mpa(truth_series)).colored(0),
-                    Series::line(&names[i], mpa(&s.estimates[i])).colored(1),
+                    Series::line(truth_label, mpa(truth_series))
+                        .colored(0)
+                        .width(2),
+                    Series::line(&names[i], mpa(&s.estimates[i]))
+                        .colored(1)
+                        .dashed(),
+                    Series::line(
+                        "estimate − truth",
+                        mpa(&s.estimates[i]
+                            .iter()
+                            .zip(truth_series.iter())
+                            .map(|(e, t)| e - t)
+                            .collect::<Vec<f64>>()),
+                    )
+                    .colored(2),
                 ],
             ));
         }
@@ -302,7 +322,12 @@ fn write_lab_files(dir: &mut OutputDir, r: &LabReport, s: &LabSeries) -> Result<
     Ok(())
 }
 
-fn write_files(dir: &mut OutputDir, r: &TwinReport, s: &TwinSeries) -> Result<()> {
+fn write_files(
+    dir: &mut OutputDir,
+    r: &TwinReport,
+    s: &TwinSeries,
+    threshold: Option<(&str, f64)>,
+) -> Result<()> {
     let names: Vec<String> = r
         .estimators
         .iter()
@@ -334,14 +359,18 @@ fn write_files(dir: &mut OutputDir, r: &TwinReport, s: &TwinSeries) -> Result<()
     };
     let first = s.estimates.first().map_or(&[][..], |v| v.as_slice());
     let label = names.first().map_or("estimate", |n| n.as_str());
+    // Truth solid and wide, the estimate dashed on top; the residual on its own panel.
+    let residual = |v: &[f64]| -> Vec<f64> { v.iter().zip(&s.truth).map(|(e, t)| e - t).collect() };
     let panels = [
         Panel::new(
             "root stress, whole run",
             "t [s]",
             "stress [MPa]",
             vec![
-                Series::line("truth (full solver, N = 16)", mpa(&s.truth)).colored(0),
-                Series::line(label, mpa(first)).colored(1),
+                Series::line("truth (full solver, N = 16)", mpa(&s.truth))
+                    .colored(0)
+                    .width(2),
+                Series::line(label, mpa(first)).colored(1).dashed(),
             ],
         ),
         Panel::new(
@@ -349,9 +378,15 @@ fn write_files(dir: &mut OutputDir, r: &TwinReport, s: &TwinSeries) -> Result<()
             "t [s]",
             "stress [MPa]",
             vec![
-                Series::line("truth", window(&s.truth)).colored(0),
-                Series::line(label, window(first)).colored(1),
+                Series::line("truth", window(&s.truth)).colored(0).width(2),
+                Series::line(label, window(first)).colored(1).dashed(),
             ],
+        ),
+        Panel::new(
+            "residual: estimate − truth, 20 s window",
+            "t [s]",
+            "stress [MPa]",
+            vec![Series::line("estimate − truth", window(&residual(first))).colored(2)],
         ),
     ];
     dir.write_with("estimate_stress.png", |p| {
@@ -359,30 +394,57 @@ fn write_files(dir: &mut OutputDir, r: &TwinReport, s: &TwinSeries) -> Result<()
             p,
             "root stress: truth and estimate (core, N = 3, f32)",
             &panels,
-            2,
+            3,
             1,
-            (1200, 900),
+            (1200, 1200),
         )
     })?;
+    // Exceedance: cycles with a range at least S, against S (the upper edge of each bin).
     let h = &r.histogram;
-    let bars = |v: &[f64]| -> Vec<(f64, f64)> {
-        v.iter()
+    let exceed = |v: &[f64]| -> Vec<(f64, f64)> {
+        let mut above = 0.0;
+        let mut pts: Vec<(f64, f64)> = v
+            .iter()
             .enumerate()
-            .filter(|(_, c)| **c > 0.0)
-            .map(|(i, c)| ((i as f64 + 0.5) * h.bin_mpa, c.log10()))
-            .collect()
+            .rev()
+            .filter_map(|(i, c)| {
+                above += c;
+                (above > 0.0).then(|| (i as f64 * h.bin_mpa, above.log10()))
+            })
+            .collect();
+        pts.reverse();
+        pts
     };
+    let (truth, estimate) = (exceed(&h.truth), exceed(&h.estimate));
+    let mut series = vec![
+        Series::line("truth", truth.clone()).colored(0).width(2),
+        Series::line("estimate (all sensors)", estimate.clone())
+            .colored(1)
+            .dashed(),
+    ];
+    if let Some((name, t)) = threshold {
+        let top = truth
+            .iter()
+            .chain(&estimate)
+            .map(|p| p.1)
+            .fold(0.0f64, f64::max);
+        series.push(
+            Series::line(
+                &format!("S–N threshold, detail {name}: {t:.1} MPa"),
+                vec![(t, 0.0), (t, top)],
+            )
+            .colored(3)
+            .width(2),
+        );
+    }
     let hist = [Panel::new(
-        "rainflow stress ranges",
-        "range [MPa]",
-        "log10 cycles per bin",
-        vec![
-            Series::marked("truth", bars(&h.truth)).colored(0),
-            Series::marked("estimate (all sensors)", bars(&h.estimate)).colored(1),
-        ],
+        "rainflow stress ranges: cycles with a range ≥ S",
+        "stress range S [MPa]",
+        "log10 cycles ≥ S",
+        series,
     )];
     dir.write_with("estimate_histogram.png", |p| {
-        render(p, "stress-range histogram", &hist, 1, 1, (900, 600))
+        render(p, "stress-range exceedance", &hist, 1, 1, (900, 600))
     })?;
     Ok(())
 }

@@ -8,19 +8,53 @@ use crate::tune::tune;
 use anyhow::{bail, Result};
 use serde_json::json;
 
-/// What `static --json` prints: scene, kind, elements, solver and the static tip deflection \[m\].
+use crate::tune::ARM_ELEMENTS;
+
+/// The structure `static` and `modes` describe: the scene's solver at rest, or for a scene with
+/// an `[arm]` the arm itself (full solver, [`ARM_ELEMENTS`] elements, f64), with its
+/// (solver, elements) as printed.
+fn structure(s: &Scene) -> Result<(Box<dyn crate::sim::Simulator>, usize)> {
+    let Some(arm) = &s.file.arm else {
+        return Ok((crate::run::build_simulator(s, 0.0)?, s.file.elements));
+    };
+    use crate::full::{FullSolver, SceneKind};
+    use crate::scene::Kind;
+    let kind = match s.file.kind {
+        Kind::Beam => SceneKind::BeamOnly,
+        Kind::Tip => SceneKind::TipMass,
+        Kind::Locked => SceneKind::LockedBall,
+        Kind::Free => SceneKind::FreeBall,
+        Kind::FreeNostops => SceneKind::FreeBallNoStops,
+    };
+    let sim = FullSolver::arm_at_rest(s.params()?, kind, ARM_ELEMENTS, &arm.params()?, 0.0)
+        .map_err(|e| crate::scene::map_core_error(e, s))?;
+    Ok((Box::new(sim), ARM_ELEMENTS))
+}
+
+/// The line that says which structure an arm scene's figures describe.
+fn arm_note(s: &Scene) -> Option<String> {
+    s.file.arm.as_ref().map(|_| {
+        format!(
+            "structure                  the [arm]: tapered tube with its heads, full solver, {ARM_ELEMENTS} elements, f64 (as `tune`)"
+        )
+    })
+}
+
+/// What `static --json` prints: scene, kind, elements, solver and the static tip deflection \[m\]
+/// (for a scene with an `[arm]`: of the arm, full solver, [`ARM_ELEMENTS`] elements).
 pub fn static_summary(s: &Scene) -> Result<serde_json::Value> {
-    let sim = crate::run::build_simulator(s, 0.0)?;
+    let (sim, elements) = structure(s)?;
     let d = sim.static_tip_deflection();
     Ok(
-        json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "static_tip_deflection": d }),
+        json!({ "scene": s.file.name, "kind": s.file.kind.name(), "arm": s.file.arm.is_some(), "elements": elements, "solver": sim.solver_name(), "static_tip_deflection": d }),
     )
 }
 
 /// The `count` lowest natural frequencies of the linearized model at the static equilibrium \[Hz\]
-/// (what `modes` prints).
+/// (what `modes` prints; for a scene with an `[arm]`: of the arm, full solver,
+/// [`ARM_ELEMENTS`] elements).
 pub fn lowest_frequencies(s: &Scene, count: usize) -> Result<Vec<f64>> {
-    let sim = crate::run::build_simulator(s, 0.0)?;
+    let (sim, _) = structure(s)?;
     let f = sim
         .natural_frequencies()
         .map_err(|e| crate::scene::map_core_error(e, s))?;
@@ -37,6 +71,9 @@ pub fn static_cmd(a: &InfoArgs) -> Result<()> {
         println!("{summary}");
     } else {
         println!("{}", describe(&s));
+        if let Some(n) = arm_note(&s) {
+            println!("{n}");
+        }
         println!("static tip deflection: {d:.6e} m ({:.3} mm)", d * 1e3);
     }
     Ok(())
@@ -44,7 +81,7 @@ pub fn static_cmd(a: &InfoArgs) -> Result<()> {
 
 pub fn modes(a: &ModesArgs) -> Result<()> {
     let s = load(&a.scene.scene_args())?;
-    let sim = crate::run::build_simulator(&s, 0.0)?;
+    let (sim, elements) = structure(&s)?;
     let f = lowest_frequencies(&s, a.count)?;
     let p = s.params()?;
     // Damping per mode: the structure's (C = c K: ζ = c ω / 2) and the integrator's own.
@@ -59,10 +96,13 @@ pub fn modes(a: &ModesArgs) -> Result<()> {
     if a.json {
         println!(
             "{}",
-            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "elements": s.file.elements, "solver": sim.solver_name(), "frequencies": f, "structural_damping": structural, "numerical_damping": numerical })
+            json!({ "scene": s.file.name, "kind": s.file.kind.name(), "arm": s.file.arm.is_some(), "elements": elements, "solver": sim.solver_name(), "frequencies": f, "structural_damping": structural, "numerical_damping": numerical })
         );
     } else {
         println!("{}", describe(&s));
+        if let Some(n) = arm_note(&s) {
+            println!("{n}");
+        }
         // C = c K_bending: ζ = c ω / 2 holds for the bending modes; the axial modes (the
         // highest ones, kHz) get no structural damping.
         println!("mode  frequency [Hz]  damping ratio: structural (c ω/2, bending)  numerical (integrator)");

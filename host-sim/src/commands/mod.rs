@@ -112,7 +112,10 @@ fn progress_bar(total: u64, what: &str) -> ProgressBar {
 fn pool(jobs: Option<usize>, tasks: usize) -> Result<rayon::ThreadPool> {
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
     let wanted = match jobs {
-        Some(0) => anyhow::bail!("invalid value for `--jobs`: 0 (must be at least 1)"),
+        Some(0) => anyhow::bail!(
+            "invalid value for `{}`: 0 (must be at least 1)",
+            crate::output::option("jobs")
+        ),
         Some(j) => j,
         None => cores,
     };

@@ -20,7 +20,7 @@ pub const MAX_CSV_ROWS: u64 = 20_000_000;
 /// [`MIN_STEADY_STEPS`] steps of the run), else the scene's `outputs.transient` (the same
 /// check, except that the built-in default 20 s on a run shorter than 40 s falls back to the
 /// run's second half, with a note). A window shorter than one excitation period is warned about.
-fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
+pub(crate) fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
     let h = s.file.integrator.step;
     let end = s.steps() as f64 * h;
     let check = |t: f64, key: &str| -> Result<f64> {
@@ -49,15 +49,16 @@ fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
         Ok(t)
     };
     if let Some(t) = cli {
-        return check(t, "--transient");
+        return check(t, &crate::output::option("transient"));
     }
     let t = s.file.outputs.transient;
     let default = crate::scene::OutputsSection::default().transient;
     if t == default && t > end / 2.0 {
         eprintln!(
             "note: the default transient ({default} s) would leave less than half of the run ({end} s); \
-             the steady-state figures use its second half (t ≥ {} s); set --transient to choose",
-            end / 2.0
+             the steady-state figures use its second half (t ≥ {} s); set {} to choose",
+            end / 2.0,
+            crate::output::option("transient")
         );
         return Ok(end / 2.0);
     }
@@ -339,15 +340,19 @@ fn plan(
     let from = steady_start(transient, s)?;
     let every = every.unwrap_or(s.file.outputs.every);
     if every == 0 {
-        bail!("invalid value for `--every`: 0 (must be at least 1)");
+        bail!(
+            "invalid value for `{}`: 0 (must be at least 1)",
+            crate::output::option("every")
+        );
     }
     let steps = s.steps();
     let rows = steps as u64 / every as u64 + 1;
     if rows > MAX_CSV_ROWS {
         bail!(
-            "invalid value for `--every` (or `outputs.every`): {every} writes {rows} CSV rows for {steps} \
-             steps; allowed: at most {MAX_CSV_ROWS} rows (use --every {} or more)",
-            (steps as u64).div_ceil(MAX_CSV_ROWS - 1)
+            "invalid value for `{opt}` (or `outputs.every`): {every} writes {rows} CSV rows for {steps} \
+             steps; allowed: at most {MAX_CSV_ROWS} rows (use {opt} {} or more)",
+            (steps as u64).div_ceil(MAX_CSV_ROWS - 1),
+            opt = crate::output::option("every"),
         );
     }
     Ok((exc, from, every))

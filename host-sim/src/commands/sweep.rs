@@ -11,9 +11,19 @@ use anyhow::{bail, Result};
 use serde_json::{json, Value};
 use std::time::Instant;
 
+/// The steady window's start \[s\]: `last` seconds before the end of each run, or (`None`) the
+/// start `run` and `paper` use ([`super::run::steady_start`]: `outputs.transient`, or the run's
+/// second half when the default 20 s would leave less; [`crate::run::steady_label`]).
+pub fn window(s: &Scene, last: Option<f64>) -> Result<f64> {
+    match last {
+        Some(l) => Ok(s.steps() as f64 * s.file.integrator.step - l),
+        None => super::run::steady_start(None, s),
+    }
+}
+
 /// What `sweep` checks before it computes: a harmonic scene, the frequencies (default: the
 /// paper's) against the step, and the window `last`; returns the frequencies.
-fn check(s: &Scene, freqs: Option<&[f64]>, last: f64) -> Result<Vec<f64>> {
+fn check(s: &Scene, freqs: Option<&[f64]>, from: f64) -> Result<Vec<f64>> {
     let freqs = freqs.map_or_else(|| PAPER_FREQUENCIES.to_vec(), <[f64]>::to_vec);
     if s.file.excitation.kind != crate::scene::ExcitationType::Harmonic {
         bail!("sweep needs a harmonic excitation (the scene has type = \"csv\")");
@@ -23,15 +33,19 @@ fn check(s: &Scene, freqs: Option<&[f64]>, last: f64) -> Result<Vec<f64>> {
         &freqs,
         &[s.file.excitation.amplitude_or_paper()],
         h,
-        "--freqs",
-        "--amplitude",
+        &crate::output::option("freqs"),
+        &crate::output::option("amplitude"),
     )?;
     let duration = s.steps() as f64 * h;
+    let last = duration - from;
     if !last.is_finite() || last < 10.0 * h || last >= duration {
         bail!(
-            "invalid value for `--last`: {last} (the steady-state window must hold at least 10 steps, \
-             {} s, and be shorter than the run, {duration} s)",
-            10.0 * h
+            "invalid value for `{opt}`: {last} (the steady-state window must hold at least 10 steps, \
+             {} s, and be shorter than the run, {duration} s; without `{opt}` it is the run after \
+             `outputs.transient` = {} s)",
+            10.0 * h,
+            s.file.outputs.transient,
+            opt = crate::output::option("last"),
         );
     }
     Ok(freqs)
@@ -43,12 +57,13 @@ fn check(s: &Scene, freqs: Option<&[f64]>, last: f64) -> Result<Vec<f64>> {
 pub fn sweep_in_memory(
     s: &Scene,
     freqs: Option<&[f64]>,
-    last: f64,
+    last: Option<f64>,
     jobs: Option<usize>,
 ) -> Result<Vec<SweepPoint>> {
-    let freqs = check(s, freqs, last)?;
+    let from = window(s, last)?;
+    let freqs = check(s, freqs, from)?;
     let pool = pool(jobs, freqs.len())?;
-    pool.install(|| sweep(s, &freqs, last, &|_| {}))
+    pool.install(|| sweep(s, &freqs, from, &|_| {}))
 }
 
 /// An ensemble's sweep in memory (the Python package's `sweep(..., ensemble=K)`): per frequency
@@ -56,13 +71,14 @@ pub fn sweep_in_memory(
 pub fn sweep_ensemble_in_memory(
     s: &Scene,
     freqs: Option<&[f64]>,
-    last: f64,
+    last: Option<f64>,
     jobs: Option<usize>,
     e: Ensemble,
 ) -> Result<Vec<Value>> {
-    let freqs = check(s, freqs, last)?;
+    let from = window(s, last)?;
+    let freqs = check(s, freqs, from)?;
     let pool = pool(jobs, freqs.len() * e.k)?;
-    let members = pool.install(|| sweep_members(s, &freqs, last, e, &|_| {}))?;
+    let members = pool.install(|| sweep_members(s, &freqs, from, e, &|_| {}))?;
     Ok(members.iter().map(|m| aggregate_point(m)).collect())
 }
 
@@ -73,7 +89,8 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
     if ens.is_ensemble() {
         return sweep_ensemble_cmd(a, &s, ens);
     }
-    let freqs = check(&s, a.freqs.as_deref(), a.last)?;
+    let from = window(&s, a.last)?;
+    let freqs = check(&s, a.freqs.as_deref(), from)?;
     let pool = pool(a.jobs, freqs.len())?;
     let dir = a
         .out
@@ -81,43 +98,59 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         .unwrap_or_else(|| s.file.outputs.directory.clone());
     let out = OutputDir::open(&dir, Some("sweep"), &command_line())?;
     let t0 = Instant::now();
-    let ((points, csv_path, png), _files) = with_output(out, |out| {
+    // The plot compares with the ball locked (the paper's passive case), run alongside.
+    let locked_scene = (s.file.kind.free_ball() && !a.no_plots).then(|| {
+        let mut l = s.clone();
+        l.file.kind = crate::scene::Kind::Locked;
+        l
+    });
+    let runs = freqs.len() * (1 + usize::from(locked_scene.is_some()));
+    let ((points, locked, csv_path, png), _files) = with_output(out, |out| {
         let pb = progress_bar(
-            (freqs.len() * s.steps()) as u64,
+            (runs * s.steps()) as u64,
             &format!("sweep ({} threads)", pool.current_num_threads()),
         );
-        let points = pool.install(|| sweep(&s, &freqs, a.last, &|n| pb.inc(n)))?;
+        let points = pool.install(|| sweep(&s, &freqs, from, &|n| pb.inc(n)))?;
+        let locked = match &locked_scene {
+            Some(l) => pool.install(|| sweep(l, &freqs, from, &|n| pb.inc(n)))?,
+            None => Vec::new(),
+        };
         pb.finish_and_clear();
-        let csv_path = out.write("sweep.csv", &crate::sweep::csv(&points))?;
+        let csv_path = out.write("sweep.csv", &crate::sweep::csv(&points, from))?;
         let png = if a.no_plots {
             None
         } else {
-            Some(out.write_with("sweep.png", |p| plot(p, &s, &points, a.last))?)
+            Some(out.write_with("sweep.png", |p| plot(p, &s, &points, &locked, from))?)
         };
         let failed = points.iter().filter(|p| p.failed()).count();
         let status = Status::of_points(failed);
         let extra = json!({ "points": points.len(), "failed": failed });
-        Ok(((points, csv_path, png), status, extra))
+        Ok(((points, locked, csv_path, png), status, extra))
     })?;
     let wall = t0.elapsed().as_secs_f64();
     let failed: Vec<&SweepPoint> = points.iter().filter(|p| p.failed()).collect();
     if a.json {
         println!(
             "{}",
-            json!({ "scene": s.file.name, "duration": s.file.duration, "last": a.last, "points": points, "failed": failed.len(), "csv": csv_path, "plot": png, "wall_time": wall })
+            json!({ "scene": s.file.name, "duration": s.file.duration, "last": s.steps() as f64 * s.file.integrator.step - from, "steady_from": from, "steady": crate::run::steady_label(from), "points": points, "locked": locked, "failed": failed.len(), "csv": csv_path, "plot": png, "wall_time": wall })
         );
     } else {
         println!("{}", describe(&s));
-        println!("  f [Hz]   tip Y [mm]   ball max|θ| [deg]   ball θ half p-p [deg]   impacts");
+        println!(
+            "every column over the steady window: {}",
+            crate::run::steady_label(from)
+        );
+        println!("  f [Hz]   tip Y [mm]   ball max|θ| [deg]   ball θ half p-p [deg]   impacts   flight [%]");
         for p in &points {
             match &p.error {
                 None => println!(
-                    "  {:6.3}   {:10.4}   {:17.2}   {:21.2}   {:7}",
+                    "  {:6.3}   {:10.4}   {:17.2}   {:21.2}   {:7}   {:10.1}",
                     p.frequency,
                     p.tip_amplitude * 1e3,
                     p.ball_max_deg,
                     p.ball_amplitude_deg,
                     p.impacts,
+                    100.0 * p.flight_fraction,
                 ),
                 Some(e) => println!("  {:6.3}   FAILED: {e}", p.frequency),
             }
@@ -143,7 +176,8 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
 /// `sweep --ensemble K` (K > 1): every member at every frequency; the table and the JSON give
 /// each statistic over the members, the CSV every run, the plot the mean with min–max bars.
 fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
-    let freqs = check(s, a.freqs.as_deref(), a.last)?;
+    let from = window(s, a.last)?;
+    let freqs = check(s, a.freqs.as_deref(), from)?;
     let pool = pool(a.jobs, freqs.len() * ens.k)?;
     let dir = a
         .out
@@ -160,14 +194,14 @@ fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
                 pool.current_num_threads()
             ),
         );
-        let members = pool.install(|| sweep_members(s, &freqs, a.last, ens, &|n| pb.inc(n)))?;
+        let members = pool.install(|| sweep_members(s, &freqs, from, ens, &|n| pb.inc(n)))?;
         pb.finish_and_clear();
-        let csv_path = out.write("sweep.csv", &crate::sweep::csv_members(&members, ens))?;
+        let csv_path = out.write("sweep.csv", &crate::sweep::csv_members(&members, ens, from))?;
         let points: Vec<Value> = members.iter().map(|m| aggregate_point(m)).collect();
         let png = if a.no_plots {
             None
         } else {
-            Some(out.write_with("sweep.png", |p| plot_ensemble(p, s, &points, a.last, ens))?)
+            Some(out.write_with("sweep.png", |p| plot_ensemble(p, s, &points, from, ens))?)
         };
         let failed = points.iter().filter(|p| !p["error"].is_null()).count();
         let status = Status::of_points(failed);
@@ -179,7 +213,7 @@ fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
     if a.json {
         println!(
             "{}",
-            json!({ "scene": s.file.name, "duration": s.file.duration, "last": a.last, "ensemble": ens.json(), "points": points, "failed": failed, "csv": csv_path, "plot": png, "wall_time": wall })
+            json!({ "scene": s.file.name, "duration": s.file.duration, "last": s.steps() as f64 * s.file.integrator.step - from, "steady_from": from, "steady": crate::run::steady_label(from), "ensemble": ens.json(), "points": points, "failed": failed, "csv": csv_path, "plot": png, "wall_time": wall })
         );
     } else {
         println!("{}", describe(s));
@@ -221,7 +255,7 @@ fn plot_ensemble(
     path: &std::path::Path,
     s: &Scene,
     points: &[Value],
-    last: f64,
+    from: f64,
     ens: Ensemble,
 ) -> Result<()> {
     let ok: Vec<&Value> = points.iter().filter(|p| p["error"].is_null()).collect();
@@ -230,11 +264,12 @@ fn plot_ensemble(
         .filter(|p| !p["error"].is_null())
         .map(|p| crate::ensemble::value(&p["frequency"]))
         .collect();
-    let band = |key: &str, label: &str, color: usize| -> Vec<Series> {
+    let band = |key: &str, label: &str, color: usize, scale: f64| -> Vec<Series> {
         let pick = |g: fn(&crate::ensemble::Spread) -> f64| -> Vec<(f64, f64)> {
             ok.iter()
                 .filter_map(|p| {
-                    spread_of(&p[key]).map(|sp| (crate::ensemble::value(&p["frequency"]), g(&sp)))
+                    spread_of(&p[key])
+                        .map(|sp| (crate::ensemble::value(&p["frequency"]), scale * g(&sp)))
                 })
                 .collect()
         };
@@ -247,11 +282,11 @@ fn plot_ensemble(
     render(
         path,
         &format!(
-            "Frequency response: scene {}, {}, base {} mm; last {} s of {} s; ensemble of {} (mean, min–max)",
+            "Frequency response: scene {}, {}, base {} mm; {} of {} s; ensemble of {} (mean, min–max)",
             s.file.name,
             s.file.kind.name(),
             s.file.excitation.amplitude_or_paper() * 1e3,
-            last,
+            crate::run::steady_label(from),
             s.file.duration,
             ens.k,
         ),
@@ -259,13 +294,13 @@ fn plot_ensemble(
             Panel::new(
                 "Beam tip",
                 "excitation frequency [Hz]",
-                "Y (half peak-to-peak) [m]",
-                band("tip_amplitude", "Y", 0),
+                "Y (half peak-to-peak) [mm]",
+                band("tip_amplitude", "Y", 0, 1e3),
             )
             .with_failed(failed.clone()),
             Panel::new("Ball", "excitation frequency [Hz]", "θ [deg]", {
-                let mut v = band("ball_max_deg", "max |θ|", 1);
-                v.extend(band("ball_amplitude_deg", "half p-p", 2));
+                let mut v = band("ball_max_deg", "max |θ|", 1, 1.0);
+                v.extend(band("ball_amplitude_deg", "half p-p", 2, 1.0));
                 v
             })
             .with_failed(failed),
@@ -280,9 +315,30 @@ fn plot(
     path: &std::path::Path,
     s: &crate::scene::Scene,
     points: &[SweepPoint],
-    last: f64,
+    locked: &[SweepPoint],
+    from: f64,
 ) -> Result<()> {
     let ok: Vec<&SweepPoint> = points.iter().filter(|p| !p.failed()).collect();
+    let mut tip = vec![Series::marked(
+        s.file.kind.name(),
+        ok.iter()
+            .map(|p| (p.frequency, 1e3 * p.tip_amplitude))
+            .collect(),
+    )];
+    if !locked.is_empty() {
+        tip.push(
+            Series::marked(
+                "ball locked (passive)",
+                locked
+                    .iter()
+                    .filter(|p| !p.failed())
+                    .map(|p| (p.frequency, 1e3 * p.tip_amplitude))
+                    .collect(),
+            )
+            .dashed()
+            .colored(crate::plot::GREY),
+        );
+    }
     let failed: Vec<f64> = points
         .iter()
         .filter(|p| p.failed())
@@ -291,22 +347,19 @@ fn plot(
     render(
         path,
         &format!(
-            "Frequency response: scene {}, {}, base {} mm; last {} s of {} s",
+            "Frequency response: scene {}, {}, base {} mm; {} of {} s",
             s.file.name,
             s.file.kind.name(),
             s.file.excitation.amplitude_or_paper() * 1e3,
-            last,
+            crate::run::steady_label(from),
             s.file.duration,
         ),
         &[
             Panel::new(
                 "Beam tip",
                 "excitation frequency [Hz]",
-                "Y (half peak-to-peak) [m]",
-                vec![Series::marked(
-                    "",
-                    ok.iter().map(|p| (p.frequency, p.tip_amplitude)).collect(),
-                )],
+                "Y (half peak-to-peak) [mm]",
+                tip,
             )
             .with_failed(failed.clone()),
             Panel::new(

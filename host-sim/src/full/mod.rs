@@ -2449,6 +2449,7 @@ impl Simulator for FullSolver {
             time: s.time,
             tip_deflection: s.q[i + 1],
             tip_velocity: s.v[i + 1],
+            tip_acceleration: s.a[i + 1],
             tip_angle: psi,
             tip_rate: psid,
             ball_angle: th,
