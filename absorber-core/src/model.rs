@@ -693,6 +693,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 waits(ws, r)?;
             }
         }
+        // A flight counts as a separation once it is higher than `ball.lift_height`.
+        if S::FLIGHT {
+            self.note_gap(&mut next, &mut report);
+        }
         // 4. The clock: whole steps times h (a running sum of h drifts in f32).
         next.steps = start.steps.saturating_add(1);
         next.time = T::from_count(next.steps) * h;
