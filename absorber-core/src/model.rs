@@ -142,9 +142,11 @@ pub const RESTART_INCREMENT: f64 = 100.0;
 /// `impact` and `landing` describe one of them, these count all.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EventCounts {
-    /// Take-offs from the track.
+    /// Take-offs from the track (with `ball.lift_height` > 0: flights, once they rise above
+    /// it; [`crate::flight`], "Counted").
     pub separations: u32,
-    /// Landings on the track (bounces and rolling landings).
+    /// Landings on the track (bounces and rolling landings; with `ball.lift_height` > 0, of
+    /// the counted flights).
     pub landings: u32,
     /// The landings that bounced (the ball flew on).
     pub bounces: u32,
