@@ -149,9 +149,11 @@ fn units(used: u32) -> u16 {
 /// to be moved inline (at most 64 B on a Cortex-M4F; larger, every copy is a `memcpy` call).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EventCounts {
-    /// Take-offs from the track.
+    /// Take-offs from the track (with `ball.lift_height` > 0: flights, once they rise above
+    /// it; [`crate::flight`], "Counted").
     pub separations: u8,
-    /// Landings on the track (bounces and rolling landings).
+    /// Landings on the track (bounces and rolling landings; with `ball.lift_height` > 0, of
+    /// the counted flights).
     pub landings: u8,
     /// The landings that bounced (the ball flew on).
     pub bounces: u8,
@@ -708,6 +710,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 let r = self.separation(start, &mut next, base_accel, ws, &mut report);
                 waits(ws, r)?;
             }
+        }
+        // A flight counts as a separation once it is higher than `ball.lift_height`.
+        if S::FLIGHT {
+            self.note_gap(&mut next, &mut report);
         }
         // 4. The clock: whole steps times h (a running sum of h drifts in f32).
         next.steps = start.steps.saturating_add(1);

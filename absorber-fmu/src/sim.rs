@@ -263,6 +263,7 @@ pub fn cast_params<T: Real>(p: &Params<f64>) -> Params<T> {
             landing_restitution: lit(b.landing_restitution),
             stop_contact_time: lit(b.stop_contact_time),
             min_bounce_time: lit(b.min_bounce_time),
+            lift_height: lit(b.lift_height),
         },
         integrator: Integrator {
             gamma: lit(i.gamma),

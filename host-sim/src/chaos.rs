@@ -315,8 +315,11 @@ fn document(
         d,
         "Statistics: the steady tip amplitude (half peak-to-peak), the tip RMS about the static \
          sag, the rate of stop impacts, the share of the time the ball flies, the rate of \
-         separations (every take-off), and the rate of flights of at least 10 ms (a flight \
-         counted from the last step on the track to the next, in whole steps).\n"
+         separations (take-offs whose flight rises at least `ball.lift_height` = 10 µm off the \
+         track: lower hops, made by the rigid track on the flexible housing, grow in number \
+         without bound as h shrinks; docs/model.md, \"Contact statistics\"), and the rate of \
+         flights of at least 10 ms (a flight counted from the last step on the track to the \
+         next, in whole steps).\n"
     );
     let full_freqs = [3.90, 4.05, 4.10, 4.13, 4.25];
     let full_configs = ["core3", "core6", "core16", "full6", "full16"];

@@ -169,6 +169,7 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             flight: b.flight,
             landing_restitution: b.landing_restitution as f32,
             min_bounce_time: b.min_bounce_time as f32,
+            lift_height: b.lift_height as f32,
         },
         // Every field spelled out: a new field of the core fails to compile here instead of
         // silently keeping its f32 default (generalized-α once did).

@@ -189,6 +189,10 @@ pub struct BallSection {
     /// Shortest flight a bounce may start \[s\] (0: the time step;
     /// `absorber_core::BallParams::min_bounce_time`).
     pub min_bounce_time: f64,
+    /// Height a flight must reach to count as a separation \[m\] (0: every take-off; allowed
+    /// 0 ≤ `lift_height` < R − r_b; `absorber_core::BallParams::lift_height`).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub lift_height: f64,
 }
 
 /// `[damping]`: stiffness-proportional structural damping, off by default.
@@ -913,6 +917,7 @@ impl Default for BallSection {
             flight: p.flight,
             landing_restitution: p.landing_restitution,
             min_bounce_time: p.min_bounce_time,
+            lift_height: p.lift_height,
         }
     }
 }
@@ -1282,6 +1287,7 @@ impl Scene {
                 flight: b.flight,
                 landing_restitution: b.landing_restitution,
                 min_bounce_time: b.min_bounce_time,
+                lift_height: b.lift_height,
             },
             integrator: {
                 // Field by field, so that core fields without a scene key keep their default.
@@ -1518,6 +1524,7 @@ fn scene_key(field: &str, s: &Scene) -> (String, String) {
         "ball.landing_restitution" => (field.into(), v(f.ball.landing_restitution)),
         "ball.stop_contact_time" => (field.into(), v(f.ball.stop_contact_time)),
         "ball.min_bounce_time" => (field.into(), v(f.ball.min_bounce_time)),
+        "ball.lift_height" => (field.into(), v(f.ball.lift_height)),
         "integrator.gamma" => (field.into(), v(f.integrator.gamma)),
         "integrator.beta" => (field.into(), v(f.integrator.beta)),
         "integrator.step" => (field.into(), v(f.integrator.step)),

@@ -47,6 +47,7 @@ fn every_scene_key_rejects_bad_numbers_by_name() {
         ("ball", "stop_angle_deg", true),
         ("ball", "restitution", false),
         ("ball", "stick_speed", false),
+        ("ball", "lift_height", false),
         ("integrator", "gamma", true),
         ("integrator", "beta", true),
         ("integrator", "step", true),
@@ -103,6 +104,8 @@ fn every_scene_key_rejects_bad_numbers_by_name() {
         ("[outputs]\ntransient = -1.0\n", "outputs.transient"),
         ("[outputs]\ntransient = nan\n", "outputs.transient"),
         ("[outputs]\nevery = 0\n", "outputs.every"),
+        // Above the path radius of the ball's centre (Table 1: 32 mm) no flight could count.
+        ("[ball]\nlift_height = 0.05\n", "ball.lift_height"),
     ] {
         let e = err_of(text);
         assert!(
@@ -111,6 +114,19 @@ fn every_scene_key_rejects_bad_numbers_by_name() {
         );
         assert!(!e.contains('\n'), "{e}");
     }
+}
+
+/// `ball.lift_height` names its allowed range, below and above it.
+#[test]
+fn lift_height_names_its_range() {
+    for v in ["-1e-6", "0.05", "nan"] {
+        let e = err_of(&format!("[ball]\nlift_height = {v}\n"));
+        assert!(
+            e.contains("ball.lift_height") && e.contains("0 <= lift_height < R - r_b"),
+            "{e}"
+        );
+    }
+    assert!(Scene::from_toml("[ball]\nlift_height = 1e-5\n").is_ok());
 }
 
 /// Inconsistent combinations are named too.

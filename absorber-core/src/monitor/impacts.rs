@@ -4,8 +4,13 @@
 //! side, relative speed θ̇ − ψ̇ before the impact \[rad/s\], impulse on the ball along the track
 //! \[N·s\], dissipated energy \[J\], and whether the ball stayed on the stop. When the log is full
 //! the oldest entry is dropped (a ring); the counters keep counting.
+//!
+//! A step can hold several impacts ([`crate::EventCounts::impacts`]; a coarse step with the ball
+//! between the stops in flight, or a bounce off a stop and back): the report keeps the last one's
+//! record, so [`ImpactLog::record_step`] logs that one and counts the others in
+//! [`ImpactLog::total`] and [`ImpactLog::unlogged`].
 
-use crate::model::{Impact, Side};
+use crate::model::{Impact, Side, StepReport};
 use crate::scalar::Real;
 use heapless::Deque;
 
@@ -17,6 +22,7 @@ pub struct ImpactLog<T, const K: usize> {
     positive: u32,
     negative: u32,
     stuck: u32,
+    unlogged: u32,
     max_speed: T,
     energy_loss: T,
 }
@@ -36,6 +42,7 @@ impl<T: Real, const K: usize> ImpactLog<T, K> {
             positive: 0,
             negative: 0,
             stuck: 0,
+            unlogged: 0,
             max_speed: T::zero(),
             energy_loss: T::zero(),
         }
@@ -63,6 +70,23 @@ impl<T: Real, const K: usize> ImpactLog<T, K> {
         }
     }
 
+    /// Records every stop impact of a step: the one the report keeps (the step's last, in the
+    /// log and the per-side counters) and the earlier ones it only counted (in
+    /// [`Self::total`] and [`Self::unlogged`]; `events.impacts` counts them all).
+    pub fn record_step(&mut self, report: &StepReport<T>) {
+        let counted = u32::from(report.events.impacts);
+        let logged = match &report.impact {
+            Some(impact) => {
+                self.record(impact);
+                1
+            }
+            None => 0,
+        };
+        let others = counted.saturating_sub(logged);
+        self.total = self.total.saturating_add(others);
+        self.unlogged = self.unlogged.saturating_add(others);
+    }
+
     /// The logged impacts, oldest first (at most `K`).
     pub fn iter(&self) -> impl Iterator<Item = &Impact<T>> {
         self.log.iter()
@@ -78,7 +102,13 @@ impl<T: Real, const K: usize> ImpactLog<T, K> {
         self.total
     }
 
-    /// Impacts on the `+φ_max` and the `−φ_max` stop.
+    /// Impacts counted without a record: the earlier impacts of steps that held several (their
+    /// side and speed are not kept; [`Self::per_side`] counts the recorded ones).
+    pub fn unlogged(&self) -> u32 {
+        self.unlogged
+    }
+
+    /// Impacts on the `+φ_max` and the `−φ_max` stop (the recorded ones: `total − unlogged`).
     pub fn per_side(&self) -> (u32, u32) {
         (self.positive, self.negative)
     }

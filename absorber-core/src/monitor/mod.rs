@@ -339,9 +339,7 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
         self.stress = stress;
         self.time = model.time();
         self.samples += 1;
-        if let Some(impact) = &report.impact {
-            self.impacts.record(impact);
-        }
+        self.impacts.record_step(report);
         self.record_contact(model, report);
         if self.twin.advance(base_accel).is_err() {
             self.twin_failures = self.twin_failures.saturating_add(1);
@@ -365,13 +363,14 @@ impl<T: Real, Tw: Twin<T>, const CAP: usize, const K: usize, const W: usize>
         model: &Model<T, S, N, D>,
         report: &StepReport<T>,
     ) {
+        // Every event of the step (a coarse step can hold several of a kind; the report keeps
+        // the last landing's record).
         let f = &mut self.flight;
-        f.separations = f
-            .separations
-            .saturating_add(u32::from(report.separation.is_some()));
+        let e = &report.events;
+        f.separations = f.separations.saturating_add(u32::from(e.separations));
+        f.landings = f.landings.saturating_add(u32::from(e.landings));
+        f.bounces = f.bounces.saturating_add(u32::from(e.bounces));
         if let Some(l) = &report.landing {
-            f.landings = f.landings.saturating_add(1);
-            f.bounces = f.bounces.saturating_add(u32::from(l.bounced));
             if let (false, Some(mu)) = (l.bounced, l.required_friction()) {
                 f.peak_landing_friction = f.peak_landing_friction.max(mu);
             }

@@ -259,10 +259,35 @@ impl FullSolver {
             return Ok(());
         }
         end.contact = Contact::InFlight;
+        end.lifted = false;
         self.restart_acceleration(end, report)?;
         report.separation = Some(time);
-        report.events.separations += 1;
+        self.note_lift(end, 0.0, report);
         Ok(())
+    }
+
+    /// The flight at `s` reaches the counted height: `height` \[m\] (the gap at a step's end
+    /// or a hop's apex; 0 at the take-off) above `ball.lift_height`, or that height 0 (every
+    /// take-off counts): it counts once, as a separation (the core's `System::note_lift`).
+    fn note_lift(&self, s: &mut FullState, height: f64, report: &mut StepReport<f64>) {
+        if s.contact != Contact::InFlight || s.lifted {
+            return;
+        }
+        let lift = self.params.ball.lift_height;
+        if !positive(lift) || height > lift {
+            s.lifted = true;
+            report.events.separations += 1;
+        }
+    }
+
+    /// A flying ball at a step's end `s`: its gap to the track `ρ − |c − A|` counts towards
+    /// the flight's height ([`Self::note_lift`]).
+    pub(super) fn note_gap(&self, s: &mut FullState, report: &mut StepReport<f64>) {
+        if s.contact != Contact::InFlight || s.lifted {
+            return;
+        }
+        let gap = self.params.ball.path_radius() - self.relative(s).r;
+        self.note_lift(s, gap, report);
     }
 
     /// The consistent acceleration after a change of mode (the generalized-α recursion
@@ -362,13 +387,14 @@ impl FullSolver {
             self.take_off_at_end(&mut next, start.time + h, report)?;
             return Ok(next);
         }
-        report.events.separations += 1;
         let tau = separation_fraction(self.normal_force(start)?, n_end);
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
         let mut mid = self.sub_step(start, h1, accel_mid, report)?;
         // Take-off: positions and velocities are the maximal coordinates (continuous).
         mid.contact = Contact::InFlight;
+        mid.lifted = false;
+        self.note_lift(&mut mid, 0.0, report);
         self.restart_acceleration(&mut mid, report)?;
         report.separation = Some(mid.time);
         let mut end = self.rest_of_step(&mid, h - h1, base_accel, report)?;
@@ -514,6 +540,11 @@ impl FullSolver {
         let pressed = (-self.effective_gravity(s.base_accel) - s.a[end + 1]) * n[1]
             - s.a[end] * n[0]
             + tangential * tangential / rho;
+        // The hop's apex v_n² / (2 a_p): a hop shorter than a step is seen only here.
+        if positive(pressed) {
+            self.note_lift(s, normal_speed * normal_speed / (pressed + pressed), report);
+        }
+        let counted = s.lifted;
         let bounces = landing_bounces(
             ball.landing_restitution,
             normal_speed,
@@ -529,8 +560,10 @@ impl FullSolver {
             landing.tangential_impulse = p_t;
         }
         report.landing = Some(landing);
-        report.events.landings += 1;
-        report.events.bounces += u8::from(landing.bounced);
+        if counted {
+            report.events.landings += 1;
+            report.events.bounces += u8::from(landing.bounced);
+        }
         if s.contact == Contact::InFlight {
             self.after_impulse(s, &prior);
             Ok(())

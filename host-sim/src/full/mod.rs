@@ -132,6 +132,9 @@ pub struct FullState {
     /// Branch of the orbit angle θ (θ is continuous, not wrapped to ±π); in flight, of the
     /// polar angle of the ball's centre about A.
     pub theta_ref: f64,
+    /// In flight: the flight has reached `ball.lift_height` and counts as a separation (the
+    /// core's `Flight::lifted`).
+    pub lifted: bool,
 }
 
 struct Solved {
@@ -425,6 +428,7 @@ impl FullSolver {
             base_accel: 0.0,
             contact: Contact::Off,
             theta_ref: 0.0,
+            lifted: false,
         };
         let me = element.blended_mass_matrix(params.calibration.mass_lumping);
         let kb = element.bending_stiffness();
@@ -1646,6 +1650,7 @@ impl FullSolver {
             base_accel,
             contact,
             theta_ref: prev.theta_ref,
+            lifted: prev.lifted,
         };
         let nb = 4 * self.n;
         s.q[4..4 + nb].copy_from_slice(&qi[..nb]);
@@ -2054,7 +2059,7 @@ impl FullSolver {
             outcome: absorber_core::Outcome::Converged,
             events: absorber_core::EventCounts::default(),
         };
-        let next = if start.contact == Contact::InFlight {
+        let mut next = if start.contact == Contact::InFlight {
             // In flight: a landing or a stop splits the step at the crossing (flight.rs).
             self.flight_events(start, trial, base_accel, &mut report)?
         } else {
@@ -2067,6 +2072,8 @@ impl FullSolver {
                 next
             }
         };
+        // A flight counts as a separation once it is higher than `ball.lift_height`.
+        self.note_gap(&mut next, &mut report);
         self.last_landing = report.landing;
         self.state = next;
         Ok(report)
