@@ -1,4 +1,4 @@
-//! Energies as in the paper's figures 17–19 and 26–30 (MODEL-DERIVATION §7).
+//! Energies as in the paper's figures 17–19 and 26–30 (docs/derivation.md §7).
 //!
 //! Kinetic energies use absolute velocities (relative velocity + base velocity ẏ_b along y);
 //! potentials are gravitational energies as changes from the static equilibrium, plus the

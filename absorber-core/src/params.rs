@@ -97,7 +97,7 @@ pub struct BallParams<T> {
 /// How a stop impulse `Λ ∇Gᵀ` changes the velocities (both give `Ġ⁺ = −e Ġ⁻` exactly).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImpactModel {
-    /// Instantaneous impact of the discrete model, `Δq̇ = M⁻¹ ∇Gᵀ Λ` (MODEL.md): conserves
+    /// Instantaneous impact of the discrete model, `Δq̇ = M⁻¹ ∇Gᵀ Λ` (docs/derivation.md, "Conventions"): conserves
     /// kinetic energy for e = 1 exactly, but drives the end node's slope-stretch modes
     /// (kHz, far above 1/h), which Newmark then rings down over many steps and Newton must
     /// fight (up to ~40 iterations a step, and no convergence for e = 1 in the paper scene).

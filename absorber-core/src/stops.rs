@@ -1,4 +1,4 @@
-//! The ±stops of the free ball (paper §3.5; MODEL.md, MODEL-DERIVATION §6): crossing, impact,
+//! The ±stops of the free ball (paper §3.5; docs/derivation.md §6): crossing, impact,
 //! stick and release.
 //!
 //! A step whose trial end has the ball beyond a stop is split at the crossing:
@@ -195,7 +195,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         )
     }
 
-    /// Stop impact (MODEL.md, MODEL-DERIVATION §6): projects the ball onto the stop, applies the
+    /// Stop impact (docs/derivation.md §6): projects the ball onto the stop, applies the
     /// generalized impulse `Λ = −(1+e) Ġ⁻ / (∇G W⁻¹ ∇Gᵀ)` along `∇G = ∂(θ − ψ)/∂q`,
     /// `q̇⁺ = q̇⁻ + W⁻¹ ∇Gᵀ Λ`, and decides whether the ball stays on the stop. `W` is the
     /// step's factored Newmark matrix ([`ImpactModel::OverStep`]) or the mass matrix at the

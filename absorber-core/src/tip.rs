@@ -1,8 +1,8 @@
-//! Tip mass welded to the beam end, and the ball rolling in its track (MODEL-DERIVATION §§2–5).
+//! Tip mass welded to the beam end, and the ball rolling in its track (docs/derivation.md §§2–5).
 //!
 //! The tip body and the ball depend on the beam only through the end node A: its position
 //! `r_A`, and its slope `(a₃, a₄)`, whose angle is the tip rotation `ψ = atan2(a₄, a₃)`
-//! (paper eq. 25). With the track centred at A (MODEL.md) and `u_t = (0, d)`, Lagrange's
+//! (paper eq. 25). With the track centred at A (docs/derivation.md, "Conventions") and `u_t = (0, d)`, Lagrange's
 //! equations in the physical coordinates `p = (x_A, y_A, ψ, θ)` read (`g` = effective gravity,
 //! `m = m_t + m_b`, `J_ψ = J_t + m_t d² + J_b R_tr²/r_b²`, `J_θ = (m_b + J_b/r_b²) ρ²`,
 //! `J_ψθ = −J_b R_tr ρ / r_b²`, `R_tr = ρ + r_b`):
@@ -20,7 +20,7 @@
 //!
 //! **Ball unknown.** As in the paper's partition (eq. 28), the free ball's unknown is its spin
 //! angle φ, not the orbit angle θ. Rolling without slip integrates to
-//! `θ = (R_tr ψ − r_b φ) / ρ` (MODEL-DERIVATION §3), so `E_θ` enters the ψ rows with weight
+//! `θ = (R_tr ψ − r_b φ) / ρ` (docs/derivation.md §3), so `E_θ` enters the ψ rows with weight
 //! `R_tr/ρ` and the φ row is `E_φ = −(r_b/ρ) E_θ`. The relative angle is
 //! `α = θ − ψ = (r_b/ρ)(ψ − φ)`. Using the paper's independent coordinates lets the full
 //! solver (`host-sim`) integrate exactly the same discrete equations. A locked ball (or one

@@ -119,7 +119,7 @@ fn paper_newmark_decays_at_the_theoretical_rate() {
     );
     assert!(
         (zeta - 0.0078).abs() < 0.0003,
-        "MODEL.md: about 0.8 % of critical"
+        "the conventions: about 0.8 % of critical"
     );
     assert!((measured / sigma - 1.0).abs() < 0.02);
 }

@@ -7,7 +7,7 @@ use absorber_core::{FreeBallModel, Model, Params, Scene};
 /// Exact moment of the gravity loads about the clamp in the deformed static configuration
 /// (sagging positive): `M = −g (μ ∫ x ds + m_t x_B + m_b x_D)`, with `∫ x ds` of the cubic
 /// Hermite field (the weights of the consistent load, paper eqs. 16–17), the tip mass centre
-/// `x_B = x_A + u_t2 sin ψ` and the ball centre `x_D = x_A + ρ sin θ` (MODEL.md).
+/// `x_B = x_A + u_t2 sin ψ` and the ball centre `x_D = x_A + ρ sin θ` (docs/derivation.md, "Conventions").
 fn exact_static_moment<S: Scene, const N: usize, const D: usize>(m: &Model<f64, S, N, D>) -> f64 {
     let p = m.params();
     let l = p.beam.length / N as f64;

@@ -342,7 +342,7 @@ pub fn write(
         converged: format!("{:.1} / {:.1} / {:.2} N·mm", uc * 1e3, vc * 1e3, tc * 1e3),
         verdict: if (u3 * 1e3 - 60.0).abs() < 15.0 { "reproduced (strain)" } else { "not reproduced" },
         reason: "Strain energy includes the static part (13.5 mJ); potentials are changes from the static state; \
-                 kinetic energy uses absolute velocities (MODEL-DERIVATION §7). The paper does not define its \
+                 kinetic energy uses absolute velocities (derivation.md §7). The paper does not define its \
                  potential and kinetic energy references, so only the strain energy compares unambiguously."
             .into(),
     });

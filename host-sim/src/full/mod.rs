@@ -1342,7 +1342,7 @@ impl FullSolver {
     ///
     /// The reduced residual here, `Bᵀ M B δ`, equals `Bᵀ (M ẅ − Q)` with `ẅ = B x + γ` (the
     /// augmented system's solution satisfies `Bᵀ (M ẅ_aug − Q) = 0`), which are Lagrange's
-    /// equations in the independent coordinates: the core's tip rows (MODEL-DERIVATION §§2–5),
+    /// equations in the independent coordinates: the core's tip rows (docs/derivation.md §§2–5),
     /// the same function of the local state. Only the Newton matrix comes from the core; the
     /// residual, which alone fixes the solution, stays the one in maximal coordinates, and a
     /// test checks this block against central differences of that residual. `None` for the
