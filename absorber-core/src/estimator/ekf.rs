@@ -1704,6 +1704,41 @@ mod tests {
         let qm = SMatrix::<f64, 3, 3>::from_diagonal(&SVector::from(q));
         let p2 = f * p * f.transpose() + g * qm * g.transpose();
         assert!((dense(&u2, &d2) - p2).amax() < 1e-12);
+        // Rows with leading zeros (an upper triangular F: the load's and the biases' rows) and
+        // a zero-weight column left out (compacted away, as `propagate` does): the same
+        // formula, with that column's variance zero.
+        let mut ft = f;
+        for i in 0..5 {
+            for j in 0..i {
+                ft[(i, j)] = 0.0;
+            }
+        }
+        let mut dz = d;
+        dz[1] = 0.0;
+        let fu = ft * u;
+        let keep = [0usize, 2, 3, 4];
+        let mut w1 = [[0.0f64; 5]; 5];
+        let mut d1 = [0.0f64; 5];
+        for (c, k) in keep.iter().enumerate() {
+            d1[c] = dz[*k];
+            for i in 0..5 {
+                w1[i][c] = fu[(i, *k)];
+            }
+        }
+        let mut w2: [[f64; 3]; 5] = core::array::from_fn(|i| core::array::from_fn(|k| g[(i, k)]));
+        // Only the last two rows feel the noise: leading zeros in the noise block too.
+        for row in w2.iter_mut().take(3) {
+            *row = [0.0; 3];
+        }
+        let mut gz = g;
+        for i in 0..3 {
+            for k in 0..3 {
+                gz[(i, k)] = 0.0;
+            }
+        }
+        thornton(&mut w1, &d1, keep.len(), &mut w2, &q, 3, &mut u2, &mut d2);
+        let p3 = ft * dense(&u, &dz) * ft.transpose() + gz * qm * gz.transpose();
+        assert!((dense(&u2, &d2) - p3).amax() < 1e-12);
     }
 
     /// The load models sample their continuous processes: the stationary variance is
