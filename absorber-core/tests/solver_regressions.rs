@@ -62,7 +62,7 @@ fn f32_at_50_mm_runs_300_s_in_every_newton_mode() {
 /// in docs/stability.md).
 #[test]
 fn alternating_full_scale_input_is_followed_with_at_most_two_refused_samples() {
-    let input = |k: usize| if k % 2 == 0 { 1000.0 } else { -1000.0 };
+    let input = |k: usize| if k.is_multiple_of(2) { 1000.0 } else { -1000.0 };
     fn count<T: Real>(p: Params<T>, input: impl Fn(usize) -> f64) -> (usize, usize) {
         let mut m: FreeBallModel<T, 3, 13> = Model::at_rest(p, lit(input(0))).unwrap();
         let (mut failed, mut restarts) = (0, 0);

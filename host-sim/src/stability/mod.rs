@@ -1125,7 +1125,7 @@ pub fn matrix(length: Length) -> Vec<Case> {
     // Every sample alternating ±1000 m/s², the largest input accepted, at the step's Nyquist
     // limit: a Newton solve that cycles refuses its sample (state kept); the model goes on.
     let v: Vec<f64> = (0..5001)
-        .map(|k| if k % 2 == 0 { 1000.0 } else { -1000.0 })
+        .map(|k: usize| if k.is_multiple_of(2) { 1000.0 } else { -1000.0 })
         .collect();
     add(
         "input",
