@@ -550,6 +550,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 Ok(report)
             }
             Err(e) => {
+                // A state that was not finite before the step (set from outside, e.g. restored
+                // from corrupted storage) is named as such, whatever the solve reported (a NaN
+                // pivot reads as singular). Checked on the failure path only.
+                let e = if System::<T, S, N, D>::is_finite(&self.state).is_err() {
+                    Error::NonFiniteState
+                } else {
+                    e
+                };
                 self.recovery.run += 1;
                 self.recovery.kept += 1;
                 if self.recovery.run >= RESTART_AFTER {

@@ -504,8 +504,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 stopped = it;
                 break;
             }
-            if reuse && !forced && it > 1 && norm > previous * half {
-                // Not taken: the reused matrix no longer fits; refresh at the same iterate.
+            // Not taken: the reused matrix no longer fits (it did not contract by half, or,
+            // with factors kept from an earlier step (modified Newton) in the solve's first
+            // iteration, where there is nothing to compare with, its correction leaves the
+            // trust radius); refresh at the same iterate.
+            if reuse
+                && !forced
+                && ((it > 1 && norm > previous * half)
+                    || (it == 1 && !ws.built && norm > self.max_step))
+            {
                 increment = norm;
                 refresh = true;
                 continue;

@@ -1398,6 +1398,7 @@ impl Scene {
                  (allowed: 1e-300 < E·I ≤ 1e12 N·m²)"
             );
         }
+        self.check_magnitudes(p)?;
         // Static sag of a cantilever under its load: tip masses at the end, the beam's own
         // weight distributed (wL⁴/8EI). A beam that sags more than half its length cannot carry
         // the scene (the static solve would fail with a message about Newton).
@@ -1417,6 +1418,188 @@ impl Scene {
                  sag {sag:.3e} m, more than half its length {l} m); allowed: a sag below L/2 (stiffer or \
                  shorter beam, lighter masses or smaller gravity)"
             );
+        }
+        Ok(())
+    }
+
+    /// Magnitudes the model can represent: the dimensionless ratios that meet in one entry of
+    /// the mass or stiffness matrix.
+    ///
+    /// Masses, inertias and stiffnesses enter the matrices linearly, lengths squared (as
+    /// m·u², m_b·ρ², J_b·(ρ/r_b)²). Two contributions whose ratio is beyond 1/ε (ε = 2.2e-16,
+    /// f64) cannot share a sum or a pivot: the smaller is lost in rounding and the matrix is
+    /// singular in f64 (condition number ≥ 1/ε). So mass, inertia and stiffness ratios must
+    /// lie in [ε, 1/ε] and length ratios in [√ε, 1/√ε]. The one physical bound: a ball's
+    /// moment of inertia about its centre is at most m_b·r_b² (all its mass on its surface).
+    /// The error names the key farther from the paper's value (the one most likely mistyped),
+    /// with its value, the partner it is compared with and the allowed range of the key.
+    fn check_magnitudes(&self, p: &Params<f64>) -> Result<()> {
+        let f = &self.file;
+        let d = SceneFile::default();
+        let eps = f64::EPSILON;
+        let (lo, hi) = (eps, 1.0 / eps);
+        let (lo2, hi2) = (eps.sqrt(), 1.0 / eps.sqrt());
+        let b = &p.beam;
+        // The key of a pair farther (in decades) from its paper value.
+        let far = |x: f64, x0: f64| (x / x0).log10().abs();
+        // `a` = `value` of `key` over `partner` must lie in [lo, hi]·`partner`.
+        let ratio = |key: &str,
+                     value: f64,
+                     unit: &str,
+                     partner: &str,
+                     partner_value: f64,
+                     (lo, hi): (f64, f64),
+                     why: &str|
+         -> Result<()> {
+            let r = value / partner_value;
+            if r.is_finite() && (lo..=hi).contains(&r) {
+                return Ok(());
+            }
+            bail!(
+                "invalid value for `{key}`: {} {unit} against {partner} = {} {unit}; \
+                 allowed: {:.3e} ..= {:.3e} {unit} ({why})",
+                num(value),
+                num(partner_value),
+                lo * partner_value,
+                hi * partner_value
+            )
+        };
+        let why_lin = "beyond 1/ε = 4.5e15 apart, the two cannot share an entry of the f64 \
+                       mass or stiffness matrix: it is singular";
+        let why_sq = "a length enters the inertias squared: beyond 1/√ε = 6.7e7 apart the f64 \
+                      mass matrix is singular";
+        // Beam: axial stiffness E·a/L against bending stiffness E·I/L³, i.e. a·L² against I.
+        let al2 = b.area * b.length * b.length;
+        if far(b.inertia, d.beam.inertia) > far(b.area, d.beam.area) {
+            ratio(
+                "beam.inertia",
+                b.inertia,
+                "m⁴",
+                "`beam.area`·`beam.length`² (bending against axial stiffness)",
+                al2,
+                (lo, hi),
+                why_lin,
+            )?;
+        } else {
+            ratio(
+                "beam.area",
+                b.area,
+                "m²",
+                "`beam.inertia`/`beam.length`² (axial against bending stiffness)",
+                b.inertia / (b.length * b.length),
+                (lo, hi),
+                why_lin,
+            )?;
+        }
+        let has_tip = f.kind != Kind::Beam;
+        let has_ball = f.kind.has_ball();
+        // End masses against the beam's mass (one node of the mass matrix carries both).
+        let mut masses: Vec<(&str, f64, f64)> = Vec::new();
+        if has_tip {
+            masses.push(("tip.mass", p.tip.mass, d.tip.mass));
+        }
+        if has_ball {
+            masses.push(("ball.mass", p.ball.mass, d.ball.mass));
+        }
+        for (key, m, m0) in masses {
+            if far(b.mass, d.beam.mass) > far(m, m0) {
+                ratio(
+                    "beam.mass",
+                    b.mass,
+                    "kg",
+                    &format!("`{key}`"),
+                    m,
+                    (lo, hi),
+                    why_lin,
+                )?;
+            } else {
+                ratio(key, m, "kg", "`beam.mass`", b.mass, (lo, hi), why_lin)?;
+            }
+        }
+        if has_tip {
+            // The tip's rotational inertia and offset against the beam's m·L².
+            let ml2 = b.mass * b.length * b.length;
+            ratio(
+                "tip.inertia",
+                p.tip.inertia,
+                "kg·m²",
+                "`beam.mass`·`beam.length`²",
+                ml2,
+                (0.0, hi),
+                why_lin,
+            )?;
+            ratio(
+                "tip.offset",
+                p.tip.offset,
+                "m",
+                "`beam.length`",
+                b.length,
+                (0.0, hi2),
+                why_sq,
+            )?;
+        }
+        if has_ball {
+            let bl = &p.ball;
+            // The ball's orbit radius against the beam, its spin ratio ρ/r_b.
+            ratio(
+                "ball.track_radius",
+                bl.track_radius,
+                "m",
+                "`beam.length`",
+                b.length,
+                (0.0, hi2),
+                why_sq,
+            )?;
+            let rho = bl.track_radius - bl.radius;
+            // Physical: a ball's inertia about its centre is at most m_b·r_b².
+            let jmax = bl.mass * bl.radius * bl.radius;
+            if bl.inertia.is_nan() || bl.inertia > jmax {
+                let rmin = (bl.inertia / bl.mass).sqrt();
+                if far(bl.radius, d.ball.radius) > far(bl.inertia, d.ball.inertia) {
+                    bail!(
+                        "invalid value for `ball.radius`: {} m with `ball.inertia` = {} kg·m² and \
+                         `ball.mass` = {} kg; allowed: at least √(inertia/mass) = {rmin:.4e} m (a ball's \
+                         moment of inertia about its centre is at most mass·radius², all of it on the \
+                         surface; a solid ball has 0.4)",
+                        num(bl.radius),
+                        num(bl.inertia),
+                        num(bl.mass)
+                    );
+                }
+                bail!(
+                    "invalid value for `ball.inertia`: {} kg·m² with `ball.mass` = {} kg and \
+                     `ball.radius` = {} m; allowed: 0 ..= mass·radius² = {jmax:.4e} kg·m² (a ball's \
+                     moment of inertia about its centre is at most mass·radius², all of it on the \
+                     surface; a solid ball has 0.4·mass·radius²)",
+                    num(bl.inertia),
+                    num(bl.mass),
+                    num(bl.radius)
+                );
+            }
+            let why_spin = "the ball spins ρ/r_b times faster than it orbits and that ratio \
+                            enters its inertia squared: beyond 1/√ε = 6.7e7 the f64 mass matrix \
+                            is singular";
+            if far(bl.radius, d.ball.radius) > far(bl.track_radius, d.ball.track_radius) {
+                ratio(
+                    "ball.radius",
+                    bl.radius,
+                    "m",
+                    "the orbit radius ρ = `ball.track_radius` − `ball.radius`",
+                    rho,
+                    (lo2, hi2),
+                    why_spin,
+                )?;
+            } else {
+                ratio(
+                    "ball.track_radius",
+                    rho,
+                    "m (as ρ = track_radius − radius)",
+                    "`ball.radius`",
+                    bl.radius,
+                    (lo2, hi2),
+                    why_spin,
+                )?;
+            }
         }
         Ok(())
     }
@@ -1491,6 +1674,16 @@ pub fn harmonic_warning(frequency: f64, h: f64, key: &str) -> Option<String> {
             1.0 / (STEPS_PER_PERIOD_WARN * frequency)
         )
     })
+}
+
+/// A value as users write it: plain in 1e-4 ..< 1e6, in exponent notation beyond (where the
+/// plain form runs to hundreds of digits).
+fn num(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 fn finite_positive(x: f64, key: &str) -> Result<()> {

@@ -146,6 +146,23 @@ pub fn design<S: CoreScene, const D: usize>(
     h[tip] = 1.0;
     h[nx + 1] = 1.0;
     let r = noise.measurement.powi(2);
+    // The load's random walk as the accelerometer sees it, against the measurement noise:
+    // beyond 1/√ε the measurement's variance is lost in rounding beside the load's
+    // (S = h P hᵀ + r) and the Riccati iteration cannot converge. Refused before it runs.
+    let seen = noise.load_step * g[tip].abs() / noise.measurement;
+    let most = 1.0 / f64::EPSILON.sqrt();
+    if seen.is_nan() || seen > most {
+        bail!(
+            "invalid value for `--load-step`: {:e} N per sample: the tip accelerometer sees it as \
+             {:.3e} m/s², {seen:.3e} times its noise σ = {:.3e} m/s²; allowed: at most {:.3e} N \
+             (1/√ε = {most:.1e} times the noise: beyond, the noise is lost in rounding and the \
+             filter's Riccati iteration cannot converge; on the lab scene it converged at 3e5 times the noise, not at 3e6)",
+            noise.load_step,
+            noise.load_step * g[tip].abs(),
+            noise.measurement,
+            most * noise.measurement / g[tip].abs()
+        );
+    }
     // Balanced coordinates x̃ = T⁻¹x (T diagonal, powers of two: exact): the step map mixes
     // positions, rates and accelerations of stiff axial modes, entries over ~14 decades, and
     // the Riccati iteration's rounding floor in raw units lay above its convergence test.
@@ -176,7 +193,14 @@ pub fn design<S: CoreScene, const D: usize>(
         }
     }
     if !converged {
-        bail!("the estimator's Riccati iteration did not converge");
+        bail!(
+            "the estimator's Riccati iteration did not converge (load random walk `--load-step` \
+             = {:e} N per sample, `--load-time` = {} s, measurement noise σ = {:.3e} m/s²): try a \
+             smaller `--load-step`",
+            noise.load_step,
+            noise.load_time,
+            noise.measurement
+        );
     }
     // Back to physical coordinates: K = T K̃, P = T P̃ T.
     let k = DVector::from_fn(n, |i, _| k[i] * t[i]);
