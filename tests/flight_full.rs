@@ -90,10 +90,10 @@ fn lift_height_counts_high_flights_and_changes_no_motion() {
         let (ra, rb) = (a.step(u(k)).expect("step"), b.step(u(k)).expect("step"));
         assert_eq!(a.state().q, b.state().q, "step {k}");
         assert_eq!(a.state().v, b.state().v, "step {k}");
-        take_offs += ra.events.separations;
-        counted += rb.events.separations;
-        landings[0] += ra.events.landings;
-        landings[1] += rb.events.landings;
+        take_offs += u32::from(ra.events.separations);
+        counted += u32::from(rb.events.separations);
+        landings[0] += u32::from(ra.events.landings);
+        landings[1] += u32::from(rb.events.landings);
         if b.in_flight() {
             let (c, _) = b.ball_centre().expect("ball");
             let q = &b.state().q;
@@ -124,8 +124,8 @@ fn lift_height_counts_high_flights_and_changes_no_motion() {
     for k in 1..=5_000usize {
         let (ra, rb) = (a.step(u(k)).expect("step"), b.step(u(k)).expect("step"));
         assert_eq!(a.state().q, b.state().q, "step {k}");
-        take_offs += ra.events.separations;
-        counted += rb.events.separations;
+        take_offs += u32::from(ra.events.separations);
+        counted += u32::from(rb.events.separations);
         let s = b.state();
         if s.contact == absorber_core::Contact::InFlight {
             let g = gap(&p1, s.flight.centre, [s.q[end], s.q[end + 1]]);

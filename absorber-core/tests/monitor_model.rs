@@ -104,7 +104,7 @@ fn every_event_of_a_step_is_counted() {
         let e = &r.events;
         let counts = [e.impacts, e.separations, e.landings, e.bounces];
         for (s, c) in sums.iter_mut().zip(counts) {
-            *s += c;
+            *s += u32::from(c);
         }
         multiple += u32::from(counts.iter().any(|&c| c > 1));
         mon.record(&model, &r, a).unwrap();
