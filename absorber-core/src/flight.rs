@@ -1127,6 +1127,46 @@ mod tests {
         assert!(vn.abs() < 1e-12, "rolls on: normal speed {vn}");
     }
 
+    /// A stop in flight acts only on a ball moving towards its face. A flying ball on the
+    /// track's side of the negative stop, 0.28 rad short of it and moving away from it (α̇_f > 0,
+    /// the state a crossing found from a wild trial end gave): no impact, the state untouched.
+    /// Before, it was put onto the stop line (0.28 rad along its circle) with no impulse,
+    /// +1e-3 J. The same ball moving towards the face (α̇_f < 0) is hit: its rate reverses
+    /// (to −e times it, the over-step metric keeps `α̇_f⁺ = −e α̇_f⁻` exactly).
+    #[test]
+    fn a_flying_ball_moving_away_from_a_stop_is_not_hit_by_it() {
+        let (m, mut s) = at_landing(0.5);
+        let mut ws = Workspace::default();
+        let (a, a_rate) = m.sys.end_point(&s);
+        let rho = m.sys.params.ball.path_radius();
+        let psi = tip::psi_and_rate(&System::<f64, FreeBall, 3, 13>::local(&s.q, &s.v, &s.a)).0;
+        let th = psi - m.sys.params.ball.stop_angle + 0.28;
+        let t = [th.cos(), th.sin()];
+        s.flight.centre = [a[0] + rho * th.sin(), a[1] - rho * th.cos()];
+        for sign in [1.0, -1.0] {
+            s.flight.velocity = [a_rate[0] + sign * 0.2 * t[0], a_rate[1] + sign * 0.2 * t[1]];
+            let before = s;
+            let (_, rate) = m.sys.flight_relative_angle(&s);
+            assert_eq!(rate > 0.0, sign > 0.0, "{rate}");
+            let mut hit = s;
+            let impact = m
+                .sys
+                .stop_impulse(&mut hit, Side::Negative, true, &mut ws)
+                .expect("impulse");
+            if sign > 0.0 {
+                assert!(impact.is_none(), "{impact:?}");
+                assert_eq!(hit, before);
+            } else {
+                let i = impact.expect("hit");
+                let (_, after) = m.sys.flight_relative_angle(&hit);
+                assert!(
+                    (after + 0.5 * i.relative_speed).abs() < 1e-9 * i.relative_speed.abs(),
+                    "{after} {i:?}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn separation_fraction_is_the_linear_zero_and_zero_without_positive_start() {
         assert_eq!(separation_fraction(1.0f64, -3.0), 0.25);
