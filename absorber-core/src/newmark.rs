@@ -136,20 +136,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         }
         let ch = self.newmark_chain(h);
         out.a.fill(T::zero());
-        // Converged in the positions of a whole step, `κβh_s²` (h_s the scene's step), also on
-        // a sub-step to an event (h < h_s): the acceleration a sub-step ends with is carried
-        // into the next step (its predictor moves the positions by `h_s²(½ − β)q̈`), so it
-        // needs a whole step's accuracy. Measured in its own `κβh²`, a sub-step of 70 µs
-        // accepted acceleration errors of ~10⁴ m/s² (10⁶ at 6.5 µs): the next step's
-        // predictor folded the beam end over (generalized-α, 16 elements, 3 ms) or a bounce
-        // blew up (elastic, stiff housing).
-        let whole = self.newmark_chain(self.params.integrator.step).c_q;
         let p = Problem {
             q0: &out.q,
             v0: &out.v,
             a0: &out.a,
             ch,
-            c_pos: if ch.c_q < whole { whole } else { ch.c_q },
+            c_pos: ch.c_q,
             g_eff: self.effective_gravity(base_accel),
             contact: s.contact,
             plumb: false,

@@ -568,12 +568,10 @@ impl FullSolver {
             report.events.landings += 1;
             report.events.bounces += u8::from(landing.bounced);
         }
-        if s.contact == Contact::InFlight {
-            self.after_impulse(s, &prior);
-            Ok(())
-        } else {
-            self.restart_acceleration(s, report)
-        }
+        // A plastic landing too: the accelerations go on from before it (the core's `land`
+        // says why).
+        self.after_impulse(s, &prior);
+        Ok(())
     }
 
     /// The bounce of the flying ball at `s` (on the circle, unit normal `n`, normal speed

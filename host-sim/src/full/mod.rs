@@ -1895,9 +1895,7 @@ impl FullSolver {
             &z,
             ai,
             &ch,
-            // Converged in the positions of a whole step, also on a sub-step to an event: its
-            // acceleration is carried into the next step (the core's `newmark` says why).
-            ch.c_q.max(self.step_chain(self.params.integrator.step).c_q),
+            ch.c_q,
             self.effective_gravity(base_accel),
             mode,
             &mut warm,
