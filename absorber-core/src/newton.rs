@@ -569,7 +569,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     fn step_tolerance(&self, c_pos: T, step_solve: bool) -> (T, T) {
         let tol = self.params.integrator.tolerance;
         let whole = self.newmark_chain(self.params.integrator.step).c_q;
-        if !step_solve || !(c_pos < whole) {
+        if !step_solve || c_pos.partial_cmp(&whole) != Some(core::cmp::Ordering::Less) {
             return (tol, self.settle);
         }
         let ratio = c_pos / whole;
