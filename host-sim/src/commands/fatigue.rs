@@ -402,12 +402,32 @@ fn plot(path: &std::path::Path, title: &str, points: &[FatiguePoint], amps: &[f6
         .filter(|p| p.failed())
         .map(|p| p.frequency)
         .collect();
+    render_damage(
+        path,
+        title,
+        "Miner damage rate (CAFT cutoff; no marker: no damage, every range below it)",
+        damage,
+        seq,
+        failed,
+    )
+}
+
+/// The fatigue plot's two panels: damage rate (log10, panel title `damage_title`) and S_eq
+/// against frequency, failed frequencies marked on both.
+fn render_damage(
+    path: &std::path::Path,
+    title: &str,
+    damage_title: &str,
+    damage: Vec<Series>,
+    seq: Vec<Series>,
+    failed: Vec<f64>,
+) -> Result<()> {
     render(
         path,
         title,
         &[
             Panel::new(
-                "Miner damage rate (CAFT cutoff; no marker: no damage, every range below it)",
+                damage_title,
                 "excitation frequency [Hz]",
                 "log10(damage per hour)",
                 damage,
@@ -525,28 +545,13 @@ fn plot_members(
             p.locked.equivalent_range / 1e6
         }));
     }
-    render(
+    render_damage(
         path,
         title,
-        &[
-            Panel::new(
-                "Miner damage rate (CAFT cutoff): log10 statistics of the members with damage > 0",
-                "excitation frequency [Hz]",
-                "log10(damage per hour)",
-                damage,
-            )
-            .with_failed(failed.clone()),
-            Panel::new(
-                "Equivalent stress range S_eq = (Σ n S³ / Σ n)^(1/3)",
-                "excitation frequency [Hz]",
-                "S_eq [MPa]",
-                seq,
-            )
-            .with_failed(failed),
-        ],
-        2,
-        1,
-        (1000, 900),
+        "Miner damage rate (CAFT cutoff): log10 statistics of the members with damage > 0",
+        damage,
+        seq,
+        failed,
     )
 }
 
