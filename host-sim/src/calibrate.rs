@@ -14,6 +14,7 @@
 //! clamping (κ_b ∈ [0.5, 2], κ_a ∈ [1e-6, 1], μ ∈ [0, 1], as `Calibration::validate`).
 //! The physics behind the three factors is in docs/model.md ("Calibration").
 
+use crate::identify::{Grade, Quality};
 use crate::scene::{Kind, Precision, Scene};
 use absorber_core::{Calibration, Params};
 use anyhow::{anyhow, bail, Result};
@@ -167,6 +168,52 @@ impl Fit {
             .iter()
             .fold(0.0, |m, e| m.max(e.abs()))
     }
+}
+
+/// Largest worst relative residual of a calibration written as a scene: every model from 2
+/// elements up fits a converged reference to below 1e-3 (6.5e-4 at N = 2, 4e-7 at N = 3,
+/// docs/model.md); 1 % left means the reference or the model is not what it should be.
+pub const MAX_RESIDUAL: f64 = 1e-2;
+
+/// The same when the fit stopped at its iteration cap while still improving.
+pub const MAX_RESIDUAL_AT_CAP: f64 = 1e-3;
+
+/// Worst relative residual of a good calibration: what every model from 2 elements up reaches
+/// against a converged reference (6.5e-4 at N = 2, docs/model.md).
+pub const OK_RESIDUAL: f64 = 1e-3;
+
+/// The fit's worst relative residual beside its expected range and a grade (as `identify`
+/// grades its figures): ok ≤ [`OK_RESIDUAL`], poor up to the limit of a usable calibration
+/// ([`MAX_RESIDUAL`], or [`MAX_RESIDUAL_AT_CAP`] when the fit stopped at its iteration cap),
+/// FAILED beyond (then no scene is written).
+pub fn residual_quality(worst: f64, capped: bool) -> Quality {
+    let usable = if capped {
+        MAX_RESIDUAL_AT_CAP
+    } else {
+        MAX_RESIDUAL
+    };
+    Quality {
+        figure: "worst residual".into(),
+        value: worst,
+        unit: "relative".into(),
+        expected: format!("≤ {OK_RESIDUAL:.0e}; usable ≤ {usable:.0e}"),
+        grade: if worst.is_finite() {
+            Grade::of(worst, OK_RESIDUAL, usable)
+        } else {
+            Grade::Failed
+        },
+    }
+}
+
+/// `worst residual 4.02e-7 (expected ≤ 1e-3; usable ≤ 1e-2): ok`.
+pub fn residual_line(q: &Quality) -> String {
+    format!(
+        "{} {:.2e} (expected {}): {}",
+        q.figure,
+        q.value,
+        q.expected,
+        q.grade.word()
+    )
 }
 
 const BENDING: (f64, f64) = (0.5, 2.0);

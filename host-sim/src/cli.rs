@@ -88,7 +88,11 @@ pub enum Command {
     Stability(crate::stability::StabilityArgs),
     /// Fatigue damage rate at the clamp vs frequency, free vs locked ball (root stress,
     /// rainflow, AASHTO S–N, Miner): CSV, PNG and `fatigue.manifest.json`; failed points are
-    /// marked as in `sweep` (exit code 3).
+    /// marked as in `sweep` (exit code 3). Every column is over the steady window (t ≥
+    /// `outputs.transient` to the end, as `run`, `paper` and `sweep`): damage, S_eq, impacts,
+    /// flight and tip RMS count the same samples, and the damage rate is the window's damage
+    /// per hour of it. The start-up from rest is left out because it is not service loading:
+    /// a life is the steady hourly rate extrapolated, and the ring-up would bias it.
     Fatigue(FatigueArgs),
     /// Writes docs/chaos.md: the free ball's statistics (amplitude, tip RMS, impact rate,
     /// flight share, separation rate) over steps, meshes and solvers, each an ensemble with its

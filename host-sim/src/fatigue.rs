@@ -3,8 +3,14 @@
 //! monitor (`absorber_core::monitor`): root stress → streaming rainflow → Miner's rule on an
 //! AASHTO S–N curve. One run per (frequency, amplitude, scene), in parallel (rayon).
 //!
-//! Damage rate = Miner damage of the whole run (start-up transient included, residue counted as
-//! half cycles) per hour of simulated time. Runs that fail keep what they computed and say why.
+//! Every figure of a row is over the steady window, t ≥ `outputs.transient` to the end (the
+//! window `paper`, `run` and `sweep` call steady): the monitor starts at the window's first
+//! sample, so damage (residue counted as half cycles), S_eq, ranges, cycles, impacts, flight
+//! fraction and the tip RMS all cover the same samples. Damage rate = that damage per hour of
+//! the window. The start-up from rest is left out because it is not part of the service
+//! loading: an arm under sustained excitation does not start from rest every hour, and the
+//! start-up's ring-up (or the free ball's first large swings) would bias the hourly rate a
+//! life estimate is extrapolated from. Runs that fail keep what they computed and say why.
 
 use crate::ensemble::Ensemble;
 use crate::excitation::Excitation;
@@ -27,7 +33,7 @@ pub struct RunFatigue {
     pub cycles: f64,
     /// Static root stress [Pa].
     pub static_stress: f64,
-    /// RMS tip deflection about static over the last window [m].
+    /// RMS tip deflection about static over the steady window [m].
     pub tip_rms: f64,
     /// Stop impacts.
     pub impacts: u32,
@@ -35,7 +41,7 @@ pub struct RunFatigue {
     pub flight_fraction: f64,
     /// Residue overflows (0 = exact counting).
     pub overflows: u64,
-    /// Simulated time [s].
+    /// Length of the steady window the figures cover [s].
     pub time: f64,
     /// Why the run stopped early.
     pub error: Option<String>,
@@ -48,6 +54,8 @@ pub struct FatiguePoint {
     pub frequency: f64,
     /// Base amplitude [m].
     pub amplitude: f64,
+    /// Start of the steady window [s]: every figure is over t ≥ this to the end of the run.
+    pub steady_from: f64,
     /// Free ball.
     pub free: RunFatigue,
     /// Locked ball.
@@ -83,7 +91,7 @@ fn run_one<S: CoreScene, const N: usize, const D: usize>(
     params: &Params<f64>,
     config: MonitorConfig<f64>,
     exc: &Excitation,
-    steps: usize,
+    steps: Window,
     rate: f64,
 ) -> RunFatigue {
     let fail = RunFatigue::failed;
@@ -96,22 +104,39 @@ fn run_one<S: CoreScene, const N: usize, const D: usize>(
             return fail(e.to_string());
         }
     }
+    let failure = |k: usize, t: f64, e| {
+        format!(
+            "step {k} (t = {t:.3} s): {}",
+            crate::scene::physical_failure(e, &crate::scene::Scene::paper())
+        )
+    };
+    // The transient: the model alone, nothing monitored. The impacts of the step that ends on
+    // the window's first sample are the window's (as `sweep` counts them).
+    let mut first_impacts = 0;
+    for k in 1..=steps.from {
+        match model.step(exc.at(k).accel) {
+            Ok(r) if k == steps.from => first_impacts = u32::from(r.events.impacts),
+            Ok(_) => {}
+            Err(e) => return fail(failure(k, model.time(), e)),
+        }
+    }
+    // The steady window: the monitor's first sample is the state at its start.
     let mut mon: Monitor<f64, NoTwin> = match Monitor::new(config, &model) {
         Ok(m) => m,
         Err(e) => return fail(e.to_string()),
     };
+    let tip = |m: &Model<f64, S, N, D>| m.tip_deflection() - m.static_tip_deflection();
+    let (mut sum2, mut n) = (tip(&model).powi(2), 1.0);
     let mut error = None;
-    for k in 1..=steps {
+    for k in steps.from + 1..=steps.end {
         let a = exc.at(k).accel;
         let r = model.step(a).and_then(|r| mon.record(&model, &r, a));
         if let Err(e) = r {
-            error = Some(format!(
-                "step {k} (t = {:.3} s): {}",
-                model.time(),
-                crate::scene::physical_failure(e, &crate::scene::Scene::paper())
-            ));
+            error = Some(failure(k, model.time(), e));
             break;
         }
+        sum2 += tip(&model).powi(2);
+        n += 1.0;
     }
     let f = mon.fatigue();
     RunFatigue {
@@ -120,8 +145,8 @@ fn run_one<S: CoreScene, const N: usize, const D: usize>(
         max_range: f.max_range,
         cycles: f.cycles,
         static_stress: mon.static_root_stress(),
-        tip_rms: mon.indicators().tip_rms,
-        impacts: mon.impacts().total(),
+        tip_rms: (sum2 / n).sqrt(),
+        impacts: mon.impacts().total() + first_impacts,
         flight_fraction: mon.flight_fraction(),
         overflows: mon.rainflow().overflows(),
         time: mon.elapsed(),
@@ -129,11 +154,19 @@ fn run_one<S: CoreScene, const N: usize, const D: usize>(
     }
 }
 
+/// The steps of a run: the steady window is steps `from + 1 ..= end` (its first sample the
+/// state after step `from`).
+#[derive(Clone, Copy, Debug)]
+struct Window {
+    from: usize,
+    end: usize,
+}
+
 fn pair<const N: usize, const D: usize>(
     params: &Params<f64>,
     config: MonitorConfig<f64>,
     exc: &Excitation,
-    steps: usize,
+    steps: Window,
     rate: f64,
 ) -> (RunFatigue, RunFatigue) {
     // D counts the free ball's unknown; the locked scene has one fewer.
@@ -147,7 +180,7 @@ fn locked_of<const N: usize>(
     params: &Params<f64>,
     config: MonitorConfig<f64>,
     exc: &Excitation,
-    steps: usize,
+    steps: Window,
 ) -> RunFatigue {
     crate::with_elements!(
         N,
@@ -167,7 +200,7 @@ fn run_pair(
     params: &Params<f64>,
     config: MonitorConfig<f64>,
     exc: &Excitation,
-    steps: usize,
+    steps: Window,
     rate: f64,
 ) -> Result<(RunFatigue, RunFatigue)> {
     Ok(crate::with_elements!(
@@ -187,6 +220,7 @@ pub fn fatigue_points(
     frequencies: &[f64],
     amplitudes: &[f64],
     duration: f64,
+    steady_from: f64,
 ) -> Result<Vec<FatiguePoint>> {
     let members = fatigue_members(
         params,
@@ -195,6 +229,7 @@ pub fn fatigue_points(
         frequencies,
         amplitudes,
         duration,
+        steady_from,
         Ensemble::single(),
     )?;
     Ok(members.into_iter().flatten().collect())
@@ -202,7 +237,9 @@ pub fn fatigue_points(
 
 /// The fatigue points of every member of an ensemble ([`crate::ensemble`]: the ball's initial
 /// angle and rate perturbed, the locked ball at the perturbed angle): per frequency ×
-/// amplitude, the K members' points (member 0 first), all runs in parallel.
+/// amplitude, the K members' points (member 0 first), all runs in parallel. Every figure is
+/// over the steady window t ≥ `steady_from` to `duration` (at least one step of it).
+#[allow(clippy::too_many_arguments)]
 pub fn fatigue_members(
     params: &Params<f64>,
     elements: usize,
@@ -210,6 +247,7 @@ pub fn fatigue_members(
     frequencies: &[f64],
     amplitudes: &[f64],
     duration: f64,
+    steady_from: f64,
     e: Ensemble,
 ) -> Result<Vec<Vec<FatiguePoint>>> {
     for &x in frequencies.iter().chain(amplitudes) {
@@ -218,7 +256,16 @@ pub fn fatigue_members(
         }
     }
     let h = params.integrator.step;
-    let steps = (duration / h).round() as usize;
+    let end = (duration / h).round() as usize;
+    if !steady_from.is_finite() || steady_from < 0.0 {
+        bail!("invalid steady-window start {steady_from} s (must be finite and not negative)");
+    }
+    // The first sample with t ≥ steady_from (to rounding).
+    let from = (steady_from / h - 1e-9).ceil() as usize;
+    if from >= end {
+        bail!("the steady window t ≥ {steady_from} s is empty in a {duration} s run");
+    }
+    let steps = Window { from, end };
     let jobs: Vec<(f64, f64, usize)> = amplitudes
         .iter()
         .flat_map(|&a| frequencies.iter().map(move |&f| (f, a)))
@@ -235,6 +282,7 @@ pub fn fatigue_members(
             Ok(FatiguePoint {
                 frequency: f,
                 amplitude: a,
+                steady_from,
                 free,
                 locked,
             })
@@ -278,9 +326,11 @@ pub fn csv_members(
 
 /// CSV of the points.
 pub fn csv(points: &[FatiguePoint], category: &str, moment: &str) -> String {
+    let steady_from = points.first().map_or(f64::NAN, |p| p.steady_from);
     let mut s = format!(
         "# host-sim fatigue: root-stress damage rate, AASHTO category {category} (m = 3, CAFT cutoff), moment estimate {moment}\n\
-         # damage_rate [1/h] = Miner damage of the run (residue as half cycles) per hour; s_eq, max_range, static_stress [MPa]; tip_rms [mm] over the last window\n\
+         # steady: every column over t ≥ {steady_from} s to the end of the run (the window paper, run and sweep call steady; the start-up from rest is not service loading)\n\
+         # damage_rate [1/h] = Miner damage over the window (residue as half cycles) per hour of it; s_eq, max_range, static_stress [MPa]; tip_rms [mm]; impacts and flight fraction over the window\n\
          # status: ok, or failed (then no numbers; error says why)\n\
          frequency,amplitude,status,free_damage_rate,locked_damage_rate,free_s_eq,locked_s_eq,free_max_range,locked_max_range,static_stress,free_tip_rms,locked_tip_rms,free_impacts,free_flight_fraction,free_overflows,locked_overflows,error\n"
     );
@@ -359,8 +409,10 @@ pub fn ratio(a: f64, b: f64) -> f64 {
 
 /// CSV of a comparison (damage rates per hour and their ratios to the converged mesh).
 pub fn comparison_csv(rows: &[Comparison], n: usize, m: usize) -> String {
+    let steady_from = rows.first().map_or(f64::NAN, |c| c.converged.steady_from);
     let mut s = format!(
         "# host-sim fatigue --calibrate-against {m}: damage rate [1/h] of the {n}-element model as given, calibrated ({n} elements, fitted to the full solver with {m}), and the core with {m} elements\n\
+         # steady: every damage rate over t ≥ {steady_from} s to the end of the run\n\
          # ratio_* = damage rate / the {m}-element one; free_chaotic = 1 when the free ball reached the stops (then its damage rate is a statistic of a chaotic run)\n\
          frequency,amplitude,status,locked_model,locked_calibrated,locked_converged,locked_ratio_model,locked_ratio_calibrated,free_model,free_calibrated,free_converged,free_ratio_model,free_ratio_calibrated,free_chaotic\n"
     );

@@ -57,3 +57,77 @@ fn paper_and_sweep_share_the_steady_window() {
     let csv = std::fs::read_to_string(dir.path().join("sweep.csv")).unwrap();
     assert!(csv.lines().next().unwrap().contains("t ≥ 20 s"), "{csv}");
 }
+
+/// `fatigue` uses the same window: its header, table and manifest state it, its free-ball
+/// impacts and flight fraction are the sweep's over that window (the same model), and the
+/// locked ball's figures are those of its steady harmonic response: tip RMS·√2 = the sweep's
+/// steady half peak-to-peak (a sine's, 0.5 %), S_eq = the largest range (one range per cycle,
+/// no ring-up from rest in the count, 1 %).
+#[test]
+fn fatigue_counts_damage_over_the_steady_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let (f_out, s_out) = (dir.path().join("f"), dir.path().join("s"));
+    let o = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args([
+            "fatigue",
+            "--freqs",
+            "4.13",
+            "--duration",
+            "44",
+            "--no-plots",
+        ])
+        .arg("--out")
+        .arg(&f_out)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(text.contains("steady: t ≥ 20 s to the end"), "{text}");
+    let manifest: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(f_out.join("fatigue.manifest.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(manifest["result"]["steady_from"], 20.0, "{manifest}");
+    let csv = std::fs::read_to_string(f_out.join("fatigue.csv")).unwrap();
+    assert!(
+        csv.contains("# steady: every column over t ≥ 20 s"),
+        "{csv}"
+    );
+    let head: Vec<&str> = csv
+        .lines()
+        .find(|l| l.starts_with("frequency,"))
+        .unwrap()
+        .split(',')
+        .collect();
+    let row: Vec<&str> = csv.lines().last().unwrap().split(',').collect();
+    let col = |name: &str| -> f64 {
+        let i = head.iter().position(|h| *h == name).unwrap();
+        row[i].parse().unwrap()
+    };
+    let s = json(&[
+        "sweep",
+        "--freqs",
+        "4.13",
+        "--duration",
+        "44",
+        "--out",
+        s_out.to_str().unwrap(),
+        "--json",
+    ]);
+    let q = &s["points"][0];
+    assert_eq!(col("free_impacts"), q["impacts"].as_f64().unwrap());
+    assert!(col("free_impacts") > 0.0);
+    let ff = q["flight_fraction"].as_f64().unwrap();
+    assert!((col("free_flight_fraction") - ff).abs() <= 1e-4, "{ff}");
+    let locked = s["locked"][0]["tip_amplitude"].as_f64().unwrap() * 1e3;
+    let rms = col("locked_tip_rms");
+    assert!(
+        (rms * 2f64.sqrt() / locked - 1.0).abs() < 5e-3,
+        "locked tip RMS {rms} mm · √2 against the steady amplitude {locked} mm"
+    );
+    let (seq, max) = (col("locked_s_eq"), col("locked_max_range"));
+    assert!(
+        seq / max > 0.99 && seq <= max,
+        "S_eq {seq} MPa, max range {max} MPa"
+    );
+}

@@ -3,8 +3,9 @@
 
 use super::{describe, load};
 use crate::calibrate::{fit, fit_damping, fit_f1, reference, Characteristics, DampingFit};
+use crate::calibrate::{residual_line, residual_quality, MAX_RESIDUAL};
 use crate::cli::{CalibrateArgs, IdentifyArgs};
-use crate::identify::{identify as identify_record, read_csv, Identified, Verdict};
+use crate::identify::{identify as identify_record, read_csv, Grade, Identified, Verdict};
 use crate::output::{OutputDir, Status};
 use crate::scene::{CalibrationSection, DampingSection, ExcitationType, ELEMENTS};
 use anyhow::{bail, Context, Result};
@@ -12,14 +13,6 @@ use serde_json::json;
 
 /// Largest reference mesh (the full solver's cost grows with it; 16 is converged to 1e-6).
 const MAX_REFERENCE_ELEMENTS: usize = 256;
-
-/// Largest worst relative residual of a calibration written as a scene: every model from 2
-/// elements up fits a converged reference to below 1e-3 (6.5e-4 at N = 2, 4e-7 at N = 3,
-/// docs/model.md); 1 % left means the reference or the model is not what it should be.
-const MAX_RESIDUAL: f64 = 1e-2;
-
-/// The same when the fit stopped at its iteration cap while still improving.
-const MAX_RESIDUAL_AT_CAP: f64 = 1e-3;
 
 fn row(name: &str, unit: &str, r: f64, u: f64, c: f64) -> String {
     let e = |x: f64| 100.0 * (x / r - 1.0);
@@ -103,10 +96,11 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
     let (mut dir, name) = OutputDir::for_file(&a.out, "calibrate")?;
     let (reference, free_index) = reference(&s, m)?;
     let fit = fit(&s, n, &reference, free_index)?;
-    if fit.worst() > MAX_RESIDUAL || (fit.capped && fit.worst() > MAX_RESIDUAL_AT_CAP) {
+    let quality = residual_quality(fit.worst(), fit.capped);
+    if quality.grade == Grade::Failed {
         bail!(
-            "the calibration does not fit the {m}-element reference: worst relative residual {:.2e} after {} Levenberg–Marquardt iterations{} (at most {MAX_RESIDUAL:.0e}{}); no scene written. A {n}-element model fits a converged reference to below 1e-3 (docs/model.md, \"Calibration\"): check `--reference-elements` (16 is converged) and the scene's beam",
-            fit.worst(),
+            "the calibration does not fit the {m}-element reference: {}, after {} Levenberg–Marquardt iterations{} (at most {MAX_RESIDUAL:.0e}{}); no scene written. A {n}-element model fits a converged reference to below 1e-3 (docs/model.md, \"Calibration\"): check `--reference-elements` (16 is converged) and the scene's beam",
+            residual_line(&quality),
             fit.iterations,
             if fit.capped { ", the iteration cap" } else { "" },
             if fit.capped { ", or 1e-3 at the cap" } else { "" },
@@ -150,8 +144,8 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
     let mut header = format!(
         "# Written by `host-sim calibrate`: {n} elements calibrated against the full solver with {m}\n\
          # elements (uncalibrated): f1 and f2 with the ball locked, the free-ball beam mode, the static\n\
-         # sag. Worst relative residual {:.2e}. Physics of the factors: docs/model.md, \"Calibration\".\n",
-        fit.worst()
+         # sag. Fit: {}. Physics of the factors: docs/model.md, \"Calibration\".\n",
+        residual_line(&quality)
     );
     if let Some((f1, zeta, fm)) = pole {
         header += &format!(
@@ -174,6 +168,7 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
                 "reference_elements": m,
                 "calibration": CalibrationSection::from(&params.calibration),
                 "fit": fit,
+                "quality": [&quality],
                 "errors": fit.model.errors(&reference),
                 "pole": pole.map(|(f1, z, fm)| json!({"target_f1": f1, "target_zeta": z, "model_f1": fm})),
                 "damping": damping,
@@ -193,7 +188,7 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
         "calibration: bending_stiffness = {:.9}, axial_stiffness = {:.9}, mass_lumping = {:.9}",
         c.bending_stiffness, c.axial_stiffness, c.mass_lumping
     );
-    println!("worst residual: {:.3e}", fit.worst());
+    println!("{}", residual_line(&quality));
     if let Some((f1, _, fm)) = pole {
         if f1.is_some() {
             println!(

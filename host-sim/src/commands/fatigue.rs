@@ -55,6 +55,8 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             );
         }
     }
+    let steady_from = super::run::steady_start(None, &s)?;
+    let window = format!("steady: t ≥ {steady_from} s to the end");
     let ens = a.ensemble.ensemble()?;
     if ens.is_ensemble() && a.calibrate_against.is_some() {
         anyhow::bail!(
@@ -94,6 +96,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
                 &freqs,
                 &amps,
                 s.file.duration,
+                steady_from,
                 ens,
             )
         })?;
@@ -109,18 +112,22 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             None
         } else {
             let title = format!(
-                "Root fatigue, AASHTO {} ({} s runs, {} elements, base ±{:.2} mm){}",
+                "Root fatigue, AASHTO {} (t ≥ {steady_from} s of {} s runs, {} elements, base ±{:.2} mm){}",
                 detail.name(),
                 s.file.duration,
                 s.file.elements,
                 amps.first().copied().unwrap_or(0.0) * 1e3,
                 if ens.is_ensemble() {
-                    format!("; member 0 of {}", ens.k)
+                    format!("; ensemble of {}: mean, ± sd dashed, min–max thin", ens.k)
                 } else {
                     String::new()
                 }
             );
-            Some(out.write_with("fatigue.png", |p| plot(p, &title, &points, &amps))?)
+            Some(if ens.is_ensemble() {
+                out.write_with("fatigue.png", |p| plot_members(p, &title, &members, &amps))?
+            } else {
+                out.write_with("fatigue.png", |p| plot(p, &title, &points, &amps))?
+            })
         };
         let mut failed = members
             .iter()
@@ -136,7 +143,9 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             let mut plain = params;
             plain.calibration = absorber_core::Calibration::default();
             let run = |p: &absorber_core::Params<f64>, k: usize| {
-                pool.install(|| fatigue_points(p, k, config, &freqs, &amps, s.file.duration))
+                pool.install(|| {
+                    fatigue_points(p, k, config, &freqs, &amps, s.file.duration, steady_from)
+                })
             };
             let (calibrated, converged) = (run(&cal, n)?, run(&plain, m)?);
             let rows: Vec<Comparison> = points
@@ -163,7 +172,12 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             comparison = Some((rows, fit.calibration, n, m));
         }
         let status = Status::of_points(failed);
-        let extra = json!({ "points": points.len(), "failed": failed });
+        let extra = json!({
+            "points": points.len(),
+            "failed": failed,
+            "steady_from": steady_from,
+            "steady": window,
+        });
         Ok(((points, members, csv_path, png, comparison), status, extra))
     })?;
     let wall = t0.elapsed().as_secs_f64();
@@ -172,6 +186,9 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
         detail.name(),
         s.file.elements,
         s.file.duration
+    );
+    println!(
+        "{window}: every column over it; damage rate = its Miner damage per hour of it (the start-up from rest is not service loading)"
     );
     if ens.is_ensemble() {
         return ensemble_table(&members, ens, &csv_path, png.as_deref(), wall);
@@ -313,7 +330,7 @@ fn ensemble_table(
     }
     println!("wrote {}", csv_path.display());
     if let Some(p) = png {
-        println!("wrote {} (member 0)", p.display());
+        println!("wrote {} (mean, ± sd, min–max of the members)", p.display());
     }
     println!("wall time {wall:.2} s ({} runs)", 2 * members.len() * ens.k);
     if failed > 0 {
@@ -385,12 +402,32 @@ fn plot(path: &std::path::Path, title: &str, points: &[FatiguePoint], amps: &[f6
         .filter(|p| p.failed())
         .map(|p| p.frequency)
         .collect();
+    render_damage(
+        path,
+        title,
+        "Miner damage rate (CAFT cutoff; no marker: no damage, every range below it)",
+        damage,
+        seq,
+        failed,
+    )
+}
+
+/// The fatigue plot's two panels: damage rate (log10, panel title `damage_title`) and S_eq
+/// against frequency, failed frequencies marked on both.
+fn render_damage(
+    path: &std::path::Path,
+    title: &str,
+    damage_title: &str,
+    damage: Vec<Series>,
+    seq: Vec<Series>,
+    failed: Vec<f64>,
+) -> Result<()> {
     render(
         path,
         title,
         &[
             Panel::new(
-                "Miner damage rate (CAFT cutoff)",
+                damage_title,
                 "excitation frequency [Hz]",
                 "log10(damage per hour)",
                 damage,
@@ -407,6 +444,114 @@ fn plot(path: &std::path::Path, title: &str, points: &[FatiguePoint], amps: &[f6
         2,
         1,
         (1000, 900),
+    )
+}
+
+/// Mean, standard deviation, smallest and largest of a figure over the members.
+struct Stats {
+    mean: f64,
+    sd: f64,
+    min: f64,
+    max: f64,
+}
+
+/// The [`Stats`] of `xs` (NaN for none).
+fn spread(xs: &[f64]) -> Stats {
+    if xs.is_empty() {
+        return Stats {
+            mean: f64::NAN,
+            sd: f64::NAN,
+            min: f64::NAN,
+            max: f64::NAN,
+        };
+    }
+    let n = xs.len() as f64;
+    let mean = xs.iter().sum::<f64>() / n;
+    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    let (min, max) = xs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    Stats {
+        mean,
+        sd: var.sqrt(),
+        min,
+        max,
+    }
+}
+
+/// The ensemble's fatigue plot: per scene (free, locked) and amplitude the members' mean
+/// (markers, a wide line), mean ± sd (dashed) and min–max (thin lines) in one colour; the
+/// damage panel over log10 of the members' rates (the rates span decades; a member without
+/// damage, all ranges below the cutoff, has no logarithm and is left out), S_eq in MPa. A point with a
+/// failed member is marked failed.
+fn plot_members(
+    path: &std::path::Path,
+    title: &str,
+    members: &[Vec<FatiguePoint>],
+    amps: &[f64],
+) -> Result<()> {
+    let log = |x: f64| if x > 0.0 { x.log10() } else { f64::NAN };
+    let ok: Vec<&Vec<FatiguePoint>> = members
+        .iter()
+        .filter(|m| !m.is_empty() && !m.iter().any(FatiguePoint::failed))
+        .collect();
+    let failed: Vec<f64> = members
+        .iter()
+        .filter(|m| m.iter().any(FatiguePoint::failed))
+        .filter_map(|m| m.first().map(|p| p.frequency))
+        .collect();
+    let bands = |amp: f64, name: &str, color: usize, f: &dyn Fn(&FatiguePoint) -> f64| {
+        let stats: Vec<(f64, Stats)> = ok
+            .iter()
+            .filter(|m| m[0].amplitude == amp)
+            .map(|m| {
+                let xs: Vec<f64> = m.iter().map(f).filter(|x| x.is_finite()).collect();
+                (m[0].frequency, spread(&xs))
+            })
+            .collect();
+        let pick = |g: &dyn Fn(&Stats) -> f64| -> Vec<(f64, f64)> {
+            stats.iter().map(|(x, sp)| (*x, g(sp))).collect()
+        };
+        vec![
+            Series::marked(&format!("{name} mean"), pick(&|s| s.mean))
+                .colored(color)
+                .width(2),
+            Series::line(&format!("{name} ± sd"), pick(&|s| s.mean + s.sd))
+                .colored(color)
+                .dashed(),
+            Series::line("", pick(&|s| s.mean - s.sd))
+                .colored(color)
+                .dashed(),
+            Series::line(&format!("{name} min–max"), pick(&|s| s.min)).colored(color),
+            Series::line("", pick(&|s| s.max)).colored(color),
+        ]
+    };
+    let mut damage = Vec::new();
+    let mut seq = Vec::new();
+    for (k, &amp) in amps.iter().enumerate() {
+        let tag = if amps.len() > 1 {
+            format!(" {:.2} mm", amp * 1e3)
+        } else {
+            String::new()
+        };
+        let (cf, cl) = (FREE + 2 * k, LOCKED + 2 * k);
+        let (free, locked) = (format!("free{tag}"), format!("locked{tag}"));
+        damage.extend(bands(amp, &free, cf, &|p| log(p.free.damage_rate)));
+        damage.extend(bands(amp, &locked, cl, &|p| log(p.locked.damage_rate)));
+        seq.extend(bands(amp, &free, cf, &|p| p.free.equivalent_range / 1e6));
+        seq.extend(bands(amp, &locked, cl, &|p| {
+            p.locked.equivalent_range / 1e6
+        }));
+    }
+    render_damage(
+        path,
+        title,
+        "Miner damage rate (CAFT cutoff): log10 statistics of the members with damage > 0",
+        damage,
+        seq,
+        failed,
     )
 }
 
