@@ -451,7 +451,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         step_solve: bool,
     ) -> Result<Solved<T, D>, Error> {
         let max = self.params.integrator.max_iterations;
-        let (tol, settle) = self.step_tolerance(p.c_pos, step_solve);
+        let tol = self.params.integrator.tolerance;
         ws.reserve = if step_solve { work::RESERVE } else { 0 };
         let half = lit::<T>(0.5);
         let mut increment = T::zero();
@@ -534,7 +534,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             // close to the exact discrete one as full Newton's.
             let settled = !reuse || it == 1 || {
                 let theta = norm / previous;
-                theta * norm <= (T::one() - theta) * settle
+                theta * norm <= (T::one() - theta) * self.settle
             };
             if norm <= tol && settled {
                 return Ok(Solved {
@@ -563,26 +563,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             iterations: max,
             increment: to_f64(increment),
         })
-    }
-
-    /// The tolerance and the settling bound of a solve whose position increments are scaled
-    /// by `c_pos`. A Newmark sub-step to an event (`step_solve`, `c_pos` below the whole step's
-    /// `κβh_s²`) converges in the positions of a whole step: `|κβh_s² Δq̈| ≤ tolerance`, i.e.
-    /// the tolerance times `c_pos/(κβh_s²)` in its own units (not below the rounding floor
-    /// 8ε; the trust radius stays in its own units). Its acceleration is carried into the
-    /// next step, whose predictor moves the positions by `h_s²(½ − β)q̈`: measured in its own
-    /// `κβh²`, a 70 µs rest after a bounce accepted acceleration errors of ~10⁴ m/s², and the
-    /// next step's trial folded the beam end over (generalized-α, 16 elements, 3 ms).
-    fn step_tolerance(&self, c_pos: T, step_solve: bool) -> (T, T) {
-        let tol = self.params.integrator.tolerance;
-        let whole = self.newmark_chain(self.params.integrator.step).c_q;
-        if !step_solve || c_pos.partial_cmp(&whole) != Some(core::cmp::Ordering::Less) {
-            return (tol, self.settle);
-        }
-        let ratio = c_pos / whole;
-        let floor = T::default_epsilon() * lit(8.0);
-        let scaled = |x: T| if x * ratio > floor { x * ratio } else { floor };
-        (scaled(tol), scaled(self.settle))
     }
 
     /// Damping factor λ of a Newton correction `dx` larger than the trust radius `MAX_STEP`:

@@ -439,13 +439,10 @@ impl FullSolver {
         let mut mid = self.sub_step(start, h1, accel_mid, report)?;
         match event {
             FlightEvent::Landing => self.land(&mut mid, report)?,
-            // (No impact when the ball at the crossing moves away from the face: the step is
-            // split there all the same, and its rest looks again.)
             FlightEvent::Stop(side, inside) => {
-                if let Some(impact) = self.stop_in_flight(&mut mid, side, inside)? {
-                    report.impact = Some(impact);
-                    report.events.impacts += 1;
-                }
+                let impact = self.stop_in_flight(&mut mid, side, inside)?;
+                report.impact = Some(impact);
+                report.events.impacts += 1;
             }
         }
         let mut end = self.rest_of_step(&mid, h - h1, base_accel, report)?;
@@ -465,10 +462,9 @@ impl FullSolver {
         let mut end = self.sub_step(mid, h_rest, base_accel, report)?;
         if end.contact == Contact::InFlight {
             if let Some((side, inside, _)) = self.stop_crossing(mid, &end) {
-                if let Some(impact) = self.stop_in_flight(&mut end, side, inside)? {
-                    report.impact = report.impact.or(Some(impact));
-                    report.events.impacts += 1;
-                }
+                let impact = self.stop_in_flight(&mut end, side, inside)?;
+                report.impact = report.impact.or(Some(impact));
+                report.events.impacts += 1;
             }
             if self.relative(&end).r > self.params.ball.path_radius() {
                 self.land(&mut end, report)?;
@@ -568,10 +564,12 @@ impl FullSolver {
             report.events.landings += 1;
             report.events.bounces += u8::from(landing.bounced);
         }
-        // A plastic landing too: the accelerations go on from before it (the core's `land`
-        // says why).
-        self.after_impulse(s, &prior);
-        Ok(())
+        if s.contact == Contact::InFlight {
+            self.after_impulse(s, &prior);
+            Ok(())
+        } else {
+            self.restart_acceleration(s, report)
+        }
     }
 
     /// The bounce of the flying ball at `s` (on the circle, unit normal `n`, normal speed
@@ -672,24 +670,13 @@ impl FullSolver {
 
     /// A stop met by the flying ball at `s` (spec "Stop in flight"): the centre rotated about A
     /// onto the stop line, a frictionless impulse along `∇α_f` towards the face met; the ball
-    /// flies on, the accelerations go on from before the impulse. A ball that does not move
-    /// towards the face met does not hit it: `None`, `s` left as it is (the core's
-    /// `stop_impulse` says why: projected without an impulse, it gained energy).
+    /// flies on, the accelerations go on from before the impulse.
     fn stop_in_flight(
         &self,
         s: &mut FullState,
         side: Side,
         inside: bool,
-    ) -> Result<Option<Impact<f64>>, Error> {
-        let rate = self.relative_rate(s);
-        let towards = if inside {
-            side.sign::<f64>() * rate
-        } else {
-            -side.sign::<f64>() * rate
-        };
-        if towards.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-            return Ok(None);
-        }
+    ) -> Result<Impact<f64>, Error> {
         let prior = s.clone();
         let ball = &self.params.ball;
         let psi = s.q[self.zloc(PSI)];
@@ -743,7 +730,7 @@ impl FullSolver {
         }
         *s = self.complete(&qi, &vi, &ai, mode, s, s.time, s.base_accel, s.contact)?;
         self.after_impulse(s, &prior);
-        Ok(Some(impact))
+        Ok(impact)
     }
 
     /// A local gradient `g` (over the 10 local coordinates) on the independent coordinates of

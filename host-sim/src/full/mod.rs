@@ -1463,15 +1463,7 @@ impl FullSolver {
         full: bool,
     ) -> Result<Solved, Error> {
         let max = self.params.integrator.max_iterations;
-        // A sub-step to an event (`c_pos` below the whole step's κβh_s²) converges in the
-        // positions of a whole step, its tolerance scaled by c_pos/(κβh_s²) (not below 8ε): its
-        // acceleration is carried into the next step (the core's `step_tolerance`).
-        let whole = self.step_chain(self.params.integrator.step).c_q;
-        let tol = if c_pos < whole {
-            (self.params.integrator.tolerance * (c_pos / whole)).max(8.0 * f64::EPSILON)
-        } else {
-            self.params.integrator.tolerance
-        };
+        let tol = self.params.integrator.tolerance;
         let ni = x.len();
         let loc0 = 4 * self.n - 4;
         let held_spin_row = if self.scene.free_ball() {
