@@ -97,7 +97,8 @@ def run(
         A dict with one ``numpy.ndarray`` (float64) per CSV column of ``host-sim run``, keyed
         like the CSV header (:data:`CSV_COLUMNS`): ``t`` [s], ``base_y`` [m], ``tip_y`` [m],
         ``tip_deflection`` [m], ``tip_angle`` [rad], ``ball_angle`` [rad], ``ball_rel_angle``
-        [rad], the energies ``beam_strain`` … ``ball_potential`` [J], ``iterations``,
+        [rad], the energies ``beam_strain``, ``beam_kinetic``, ``beam_potential``,
+        ``tip_kinetic``, ``tip_potential``, ``ball_kinetic``, ``ball_potential`` [J], ``iterations``,
         ``impact`` (0/1), ``base_accel`` [m/s²], ``tip_velocity`` [m/s], ``tip_rate``,
         ``ball_rate``, ``ball_rel_rate`` [rad/s], ``ball_spin`` [rad], ``ball_spin_rate``
         [rad/s], ``normal_force`` and ``tangential_force`` (the track's force on the ball) [N],
