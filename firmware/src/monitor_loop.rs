@@ -152,7 +152,7 @@ impl Sim for MonitorLoop {
         let inner = WithMonitor::<Pole>::init_with(field!(slot, inner), params(setup))?;
         let p = *inner.model.params();
         let corner = bending_corner(&inner.model)?;
-        field!(slot, ekf).write(Filter::new(&inner.model, config(&p, corner)?)?);
+        Filter::new_in(field!(slot, ekf), &inner.model, config(&p, corner)?)?;
         let mut crossing = p;
         crossing.integrator.events = EventLocation::Crossing;
         Pole::at_rest_in(field!(slot, pole), crossing, 0.0)?;

@@ -171,6 +171,16 @@ struct Recursion<T> {
     blocks: usize,
 }
 
+/// The fixed data of a filter, checked ([`Ekf::new`]).
+struct Parts<T: Real, const D: usize, const M: usize, const X: usize> {
+    rec: Recursion<T>,
+    basis: ModalBasis<T, D, M>,
+    scale: SVector<T, X>,
+    ud_d: SVector<T, X>,
+    load_map: [[T; 2]; 2],
+    load_noise: [[T; 2]; 2],
+}
+
 /// Noise columns of the time update (load, one per mode, one per bias, two for the ball's
 /// events): at most `NOISE` (so `M ≤ 6`).
 const NOISE: usize = 12;
@@ -237,10 +247,13 @@ pub struct Ekf<T: Real, S: Scene, const N: usize, const D: usize, const M: usize
     dx: SMatrix<T, D, X>,
     /// Their modal projections `Π δx`.
     xi: SMatrix<T, M, X>,
-    /// Scratch of the time update: `F U` and the noise columns.
-    w1: SMatrix<T, X, X>,
-    w2: SMatrix<T, X, NOISE>,
+    /// Scratch of the time update, by rows: `F U` (its columns of positive weight only) and
+    /// the noise columns.
+    w1: [[T; X]; X],
+    w2: [[T; NOISE]; X],
     scratch: BandMatrix<T, D>,
+    /// The same, dense (for the products with the modes).
+    dense: SMatrix<T, D, D>,
     _scene: core::marker::PhantomData<S>,
 }
 
@@ -257,6 +270,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
 
     /// Row of the end node's vertical coordinate.
     const TIP: usize = 4 * N - 3;
+    /// The load's slot (after the modal errors) and the first bias slot: compile-time
+    /// constants of `X` (`X = blocks·M + AUGMENTED`, checked by `new`), so every index built on
+    /// them is in range by construction.
+    const LD: usize = X - AUGMENTED;
+    const OFF: usize = X - KINDS;
     /// Row of the ball's spin (free ball only).
     const SPIN: usize = 4 * N;
 
@@ -264,6 +282,43 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     /// `config`. The scene must hold loads ([`crate::scene::Loaded`], [`crate::scene::Arm`]);
     /// `X` must match the model's integrator (`3M + 6` for generalized-α).
     pub fn new(model: &Model<T, S, N, D>, config: EkfConfig<T, M>) -> Result<Self, Error> {
+        let parts = Self::parts(model, &config)?;
+        let mut ekf = Self::fresh(model, config, parts);
+        ekf.finish(model);
+        Ok(ekf)
+    }
+
+    /// [`Ekf::new`] into caller storage (a `static`, or a field of a larger value built in
+    /// place): only the small fixed data (the modal basis, the recursion's constants) is built
+    /// on the stack, the filter is written in place. On error `slot` holds nothing usable.
+    pub fn new_in<'a>(
+        slot: &'a mut core::mem::MaybeUninit<Self>,
+        model: &Model<T, S, N, D>,
+        config: EkfConfig<T, M>,
+    ) -> Result<&'a mut Self, Error> {
+        let parts = Self::parts(model, &config)?;
+        let ekf = slot.write(Self::fresh(model, config, parts));
+        ekf.finish(model);
+        Ok(ekf)
+    }
+
+    /// The recovery vectors and the static stress, from the built filter.
+    fn finish(&mut self, model: &Model<T, S, N, D>) {
+        self.recover = self.recovery(model);
+        // The recovery's terms vanish at the equilibrium.
+        self.static_stress = self
+            .config
+            .section
+            .stress_of_moment(static_root_moment(model));
+    }
+
+    /// What [`Ekf::new`] checks, and the filter's fixed data: the recursion's constants, the
+    /// modal basis, the scaling, the initial variances and the load model.
+    #[allow(clippy::type_complexity)]
+    fn parts(
+        model: &Model<T, S, N, D>,
+        config: &EkfConfig<T, M>,
+    ) -> Result<Parts<T, D, M, X>, Error> {
         #[allow(clippy::let_unit_value)]
         let () = Self::CHECK;
         config.sensors.check()?;
@@ -365,7 +420,30 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 ud_d[off + k] = s.bias_sd * s.bias_sd;
             }
         }
-        let mut ekf = Self {
+        Ok(Parts {
+            rec,
+            basis,
+            scale,
+            ud_d,
+            load_map,
+            load_noise,
+        })
+    }
+
+    /// The filter at the model's start from its checked fixed data ([`Ekf::parts`]): a plain
+    /// value expression, inlined so that it is written straight into its destination.
+    #[inline(always)]
+    fn fresh(model: &Model<T, S, N, D>, config: EkfConfig<T, M>, parts: Parts<T, D, M, X>) -> Self {
+        let Parts {
+            rec,
+            basis,
+            scale,
+            ud_d,
+            load_map,
+            load_noise,
+        } = parts;
+        let h = rec.h;
+        Self {
             config,
             consistent: basis.shapes,
             residual: basis.residual,
@@ -395,22 +473,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             },
             recover: [SVector::zeros(); 3],
             static_stress: T::zero(),
-            modulus: p.beam.modulus,
+            modulus: model.params().beam.modulus,
             samples: 0,
             last_contact: Contact::Off,
             since_event: u32::MAX,
             health: Health::new(config.health),
             dx: SMatrix::zeros(),
             xi: SMatrix::zeros(),
-            w1: SMatrix::zeros(),
-            w2: SMatrix::zeros(),
+            w1: [[T::zero(); X]; X],
+            w2: [[T::zero(); NOISE]; X],
             scratch: BandMatrix::zeros(),
+            dense: SMatrix::zeros(),
             _scene: core::marker::PhantomData,
-        };
-        ekf.recover = ekf.recovery(model);
-        // The recovery's terms vanish at the equilibrium.
-        ekf.static_stress = config.section.stress_of_moment(static_root_moment(model));
-        Ok(ekf)
+        }
     }
 
     /// The modal stress recovery vectors (module doc of [`EkfConfig::stress_factors`]):
@@ -595,7 +670,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         readings: &Readings<T>,
         report: StepReport<T>,
     ) -> Result<Estimate<T>, Error> {
-        let (ld, off) = (self.rec.blocks * M, self.rec.blocks * M + 3);
+        let (ld, off) = (Self::LD, Self::OFF);
         self.directions(model)?;
         let contact = model.state().contact;
         // The ball's relative angle is in the filter's subspace only while it rolls off the
@@ -853,7 +928,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // R_q Φ_i → directions 0..M; R_v Φ_i → M..2M (right-hand sides, negated); the load
         // moves the predictor's positions by the residual static mode Ψ (module doc), so its
         // right-hand side is e_tip − R_q Ψ.
-        let mut y = SVector::<T, D>::zeros();
+        let mut y: SVector<T, D>;
         let mut load_rhs = SVector::<T, D>::zeros();
         for (block, ch) in [
             (0usize, unit(T::one(), T::zero())),
@@ -868,15 +943,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 &mut r,
                 &mut self.scratch,
             );
+            // All M products at once, dense (one pass over the matrix for M columns: cheaper
+            // than M banded products).
+            self.scratch.write_dense(&mut self.dense);
+            let rphi = self.dense * self.consistent;
             for i in 0..M {
-                self.scratch
-                    .mul_vec(&self.consistent.column(i).into_owned(), &mut y);
-                y.neg_mut();
+                y = -column(&rphi, i);
                 model.work.solve(&mut y)?;
-                self.dx.set_column(block + i, &y);
+                set_column(&mut self.dx, block + i, &y);
             }
             if block == 0 {
-                self.scratch.mul_vec(&self.residual, &mut load_rhs);
+                load_rhs = self.dense * self.residual;
             }
         }
         // The load: R_P = −e_tip, so J δx = e_tip − R_q Ψ.
@@ -885,19 +962,22 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             *x += T::one();
         }
         model.work.solve(&mut y)?;
-        self.dx.set_column(2 * M, &y);
+        set_column(&mut self.dx, 2 * M, &y);
         self.xi = self.basis.projection * self.dx;
         // The stiff completion for the next step: the out-of-span part of the positions the
         // step gives each direction, `(I − ΦΠ)(b + c_q δx)` (the implicit step moves the stiff
         // coordinates onto their quasi-static response: `c_q J⁻¹ R_q ≈ I` on them, a
         // contraction toward the completion consistent with the current state).
         for i in 0..M {
-            let b = self.consistent.column(i) + self.dx.column(i) * self.rec.c_q;
+            let b = column(&self.consistent, i) + column(&self.dx, i) * self.rec.c_q;
             let out = b - self.basis.shapes * (self.basis.projection * b);
-            self.consistent
-                .set_column(i, &(self.basis.shapes.column(i) + out));
+            set_column(
+                &mut self.consistent,
+                i,
+                &(column(&self.basis.shapes, i) + out),
+            );
         }
-        let b = self.residual + self.dx.column(2 * M) * self.rec.c_q;
+        let b = self.residual + column(&self.dx, 2 * M) * self.rec.c_q;
         self.residual = b - self.basis.shapes * (self.basis.projection * b);
         Ok(())
     }
@@ -907,7 +987,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     /// bias, is the stress row).
     fn measurement_rows(&self, model: &Model<T, S, N, D>) -> [SVector<T, X>; KINDS] {
         let rec = self.rec;
-        let (ld, off) = (rec.blocks * M, rec.blocks * M + 3);
+        let (ld, off) = (Self::LD, Self::OFF);
         let mut rows = [SVector::<T, X>::zeros(); KINDS];
         let s = model.state();
         // Filter coordinate c → (direction, mode whose shape is in δq* (c < M) or δv*).
@@ -1018,8 +1098,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             dx.axpy(delta[i], &self.dx.column(i), T::one());
             dx.axpy(delta[M + i], &self.dx.column(M + i), T::one());
         }
-        dx.axpy(delta[rec.blocks * M], &self.dx.column(2 * M), T::one());
-        s.q.axpy(delta[rec.blocks * M], &self.residual, T::one());
+        dx.axpy(delta[Self::LD], &self.dx.column(2 * M), T::one());
+        s.q.axpy(delta[Self::LD], &self.residual, T::one());
         // Positions take the whole linear correction: `c_q δx` moves the stiff (axial and
         // high) coordinates to where the step puts them for the corrected predictor
         // (quasi-statically). Velocities and accelerations take its modal part only: the
@@ -1083,7 +1163,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         report: &StepReport<T>,
     ) {
         let rec = self.rec;
-        let (ld, off) = (rec.blocks * M, rec.blocks * M + 3);
+        let (ld, off) = (Self::LD, Self::OFF);
         // F in physical coordinates, then scaled: F̃ = T⁻¹ F T.
         let mut f = SMatrix::<T, X, X>::zeros();
         for c in 0..=2 * M {
@@ -1124,14 +1204,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 f[(i, j)] *= self.scale[j] / self.scale[i];
             }
         }
-        // Noise columns (scaled) and their variances.
-        self.w2.fill(T::zero());
+        // Noise columns (scaled) and their variances: the first `n` columns of `w2`.
         let mut q = [T::zero(); NOISE];
         let mut n = 0;
-        let mut push = |col: SVector<T, X>, var: T, w2: &mut SMatrix<T, X, NOISE>| {
-            if n < NOISE && is_positive(var) {
-                w2.set_column(n, &col);
-                q[n] = var;
+        let mut push = |col: SVector<T, X>, var: T, w2: &mut [[T; NOISE]; X]| {
+            if let (Some(qn), true) = (q.get_mut(n), is_positive(var)) {
+                *qn = var;
+                for (row, c) in w2.iter_mut().zip(col.iter()) {
+                    if let Some(x) = row.get_mut(n) {
+                        *x = *c;
+                    }
+                }
                 n += 1;
             }
         };
@@ -1197,13 +1280,47 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 }
             }
         }
-        self.w1 = f * self.ud_u;
-        let d1 = self.ud_d;
+        // W₁ = F U by rows, only its columns of positive weight (the others add nothing to
+        // U D Uᵀ); U is unit upper triangular, so column k of F U takes F's columns 0..=k.
+        // U's rows restricted to those columns, then each row of F U as the sum of the rows of
+        // U that F's nonzero entries of that row pick, in order (F is sparse: 2M + 1 entries
+        // in a modal row, at most three in the load's and one in a bias's).
+        let mut d1 = [T::zero(); X];
+        let mut ur = [[T::zero(); X]; X];
+        let mut n1 = 0;
+        let columns = self.ud_u.as_slice().chunks_exact(X);
+        for (uk, dk) in columns.zip(self.ud_d.iter()) {
+            if !is_positive(*dk) {
+                continue;
+            }
+            let Some(slot) = d1.get_mut(n1) else { break };
+            *slot = *dk;
+            for (row, x) in ur.iter_mut().zip(uk.iter()) {
+                if let Some(y) = row.get_mut(n1) {
+                    *y = *x;
+                }
+            }
+            n1 += 1;
+        }
+        let ft = f.transpose();
+        for (row, fi) in self.w1.iter_mut().zip(ft.as_slice().chunks_exact(X)) {
+            let row = row.get_mut(..n1).unwrap_or(&mut []);
+            row.fill(T::zero());
+            for (fik, uk) in fi.iter().zip(ur.iter()) {
+                if *fik != T::zero() {
+                    for (x, y) in row.iter_mut().zip(uk.iter()) {
+                        *x += *fik * *y;
+                    }
+                }
+            }
+        }
         thornton(
             &mut self.w1,
             &d1,
+            n1,
             &mut self.w2,
             &q,
+            n,
             &mut self.ud_u,
             &mut self.ud_d,
         );
@@ -1283,7 +1400,7 @@ fn quadratic<T: Real, const X: usize>(
     d: &SVector<T, X>,
     h: &SVector<T, X>,
 ) -> T {
-    let f = u.transpose() * h;
+    let f = u.tr_mul(h);
     f.iter()
         .zip(d.iter())
         .fold(T::zero(), |acc, (fi, di)| acc + *fi * *fi * *di)
@@ -1299,11 +1416,17 @@ fn bierman<T: Real, const X: usize>(
     h: &SVector<T, X>,
     r: T,
 ) -> Option<(SVector<T, X>, T)> {
-    let f = u.transpose() * h;
+    let f = u.tr_mul(h);
     let g = f.component_mul(d);
     let mut b = g;
     let mut alpha = r;
     for j in 0..X {
+        // A zero entry of `f = Uᵀ h` leaves `α`, `d_j`, column `j` of `U` and `b` as they are
+        // (exactly): skipped. Rows of unit vectors (the load's mean) and of sensors that see
+        // only some coordinates have many.
+        if f[j] == T::zero() {
+            continue;
+        }
         let prev = alpha;
         alpha += f[j] * g[j];
         if !is_positive(alpha) || !alpha.is_finite() {
@@ -1317,56 +1440,115 @@ fn bierman<T: Real, const X: usize>(
             b[i] += uij * g[j];
         }
     }
+    if !is_positive(alpha) || !alpha.is_finite() {
+        return None;
+    }
     Some((b / alpha, alpha))
 }
 
 /// Thornton's modified weighted Gram–Schmidt time update: `U D Uᵀ = W₁ D₁ W₁ᵀ + W₂ Q W₂ᵀ`
 /// (rows of `W = [W₁ W₂]` orthogonalized from the last up, in the weights `diag(D₁, Q)`).
-/// `W₁`, `W₂` are overwritten.
+/// `W₁`, `W₂` are given by rows, of which the first `n1` and `n2` columns count (columns of
+/// zero weight add nothing and are left out); they are overwritten.
+#[allow(clippy::too_many_arguments)]
 fn thornton<T: Real, const X: usize, const Q: usize>(
-    w1: &mut SMatrix<T, X, X>,
-    d1: &SVector<T, X>,
-    w2: &mut SMatrix<T, X, Q>,
+    w1: &mut [[T; X]; X],
+    d1: &[T; X],
+    n1: usize,
+    w2: &mut [[T; Q]; X],
     q: &[T; Q],
+    n2: usize,
     u: &mut SMatrix<T, X, X>,
     d: &mut SVector<T, X>,
 ) {
     u.fill(T::zero());
     for j in (0..X).rev() {
-        // D_j = Σ_k w_jk² weight_k; the weighted row, divided by D_j, gives U's column j.
-        let mut dj = T::zero();
-        for k in 0..X {
-            dj += w1[(j, k)] * w1[(j, k)] * d1[k];
+        let (up1, rest1) = w1.split_at_mut(j);
+        let (up2, rest2) = w2.split_at_mut(j);
+        let (Some(wj1), Some(wj2)) = (rest1.first(), rest2.first()) else {
+            continue;
+        };
+        let (wj1, wj2) = (wj1.get(..n1).unwrap_or(wj1), wj2.get(..n2).unwrap_or(wj2));
+        // Its leading zeros (the load's and the biases' rows of F U start at the load's
+        // column, and the rows below only remove such rows) are left out of every sum.
+        let s1 = wj1
+            .iter()
+            .position(|x| *x != T::zero())
+            .unwrap_or(wj1.len());
+        let wj1 = wj1.get(s1..).unwrap_or(&[]);
+        // The weighted row `w_jk weight_k`: D_j = Σ_k w_jk² weight_k, and its products with
+        // the rows above, divided by D_j, give U's column j.
+        let mut v1 = [T::zero(); X];
+        let mut v2 = [T::zero(); Q];
+        for ((v, w), a) in v1.iter_mut().zip(wj1.iter()).zip(d1.iter().skip(s1)) {
+            *v = *w * *a;
         }
-        for (k, qk) in q.iter().enumerate() {
-            dj += w2[(j, k)] * w2[(j, k)] * *qk;
+        for ((v, w), a) in v2.iter_mut().zip(wj2.iter()).zip(q.iter()) {
+            *v = *w * *a;
         }
-        d[j] = dj;
-        u[(j, j)] = T::one();
+        let (v1, v2) = (
+            v1.get(..wj1.len()).unwrap_or(&v1),
+            v2.get(..n2).unwrap_or(&v2),
+        );
+        let dj = dot(wj1, v1) + dot(wj2, v2);
+        if let Some(x) = u.get_mut((j, j)) {
+            *x = T::one();
+        }
+        if let Some(x) = d.get_mut(j) {
+            *x = if is_positive(dj) { dj } else { T::zero() };
+        }
         if !is_positive(dj) {
-            d[j] = T::zero();
             continue;
         }
-        for i in 0..j {
-            let mut s = T::zero();
-            for k in 0..X {
-                s += w1[(i, k)] * w1[(j, k)] * d1[k];
+        for (i, (wi1, wi2)) in up1.iter_mut().zip(up2.iter_mut()).enumerate() {
+            let wi1 = wi1.get_mut(s1..).unwrap_or(&mut []);
+            let uij = (dot(wi1, v1) + dot(wi2, v2)) / dj;
+            if let Some(x) = u.get_mut((i, j)) {
+                *x = uij;
             }
-            for (k, qk) in q.iter().enumerate() {
-                s += w2[(i, k)] * w2[(j, k)] * *qk;
+            for (a, b) in wi1.iter_mut().zip(wj1.iter()) {
+                *a -= uij * *b;
             }
-            let uij = s / dj;
-            u[(i, j)] = uij;
-            for k in 0..X {
-                let wjk = w1[(j, k)];
-                w1[(i, k)] -= uij * wjk;
-            }
-            for k in 0..Q {
-                let wjk = w2[(j, k)];
-                w2[(i, k)] -= uij * wjk;
+            for (a, b) in wi2.iter_mut().zip(wj2.iter()) {
+                *a -= uij * *b;
             }
         }
     }
+}
+
+/// Column `j` of `m`, owned, read through its storage (a column view's arithmetic reaches a
+/// panicking allocation path; this does not). Zero if `j` is out of range.
+fn column<T: Real, const R: usize, const C: usize>(
+    m: &SMatrix<T, R, C>,
+    j: usize,
+) -> SVector<T, R> {
+    let mut v = SVector::<T, R>::zeros();
+    if let Some(c) = m.as_slice().chunks_exact(R).nth(j) {
+        for (x, y) in v.iter_mut().zip(c.iter()) {
+            *x = *y;
+        }
+    }
+    v
+}
+
+/// Sets column `j` of `m` to `v` through its storage (nothing if `j` is out of range).
+fn set_column<T: Real, const R: usize, const C: usize>(
+    m: &mut SMatrix<T, R, C>,
+    j: usize,
+    v: &SVector<T, R>,
+) {
+    if let Some(c) = m.as_mut_slice().chunks_exact_mut(R).nth(j) {
+        for (x, y) in c.iter_mut().zip(v.iter()) {
+            *x = *y;
+        }
+    }
+}
+
+/// `Σ_k a_k b_k` over the shorter of the two slices.
+fn dot<T: Real>(a: &[T], b: &[T]) -> T {
+    a.iter()
+        .zip(b.iter())
+        .fold(T::zero(), |s, (x, y)| s + *x * *y)
 }
 
 #[cfg(test)]
@@ -1513,12 +1695,50 @@ mod tests {
         let f = SMatrix::<f64, 5, 5>::from_fn(|_, _| rng.next());
         let g = SMatrix::<f64, 5, 3>::from_fn(|_, _| rng.next());
         let q = [0.2, 0.0, 1.5];
-        let (mut w1, mut w2) = (f * u, g);
+        let fu = f * u;
+        let mut w1: [[f64; 5]; 5] = core::array::from_fn(|i| core::array::from_fn(|k| fu[(i, k)]));
+        let mut w2: [[f64; 3]; 5] = core::array::from_fn(|i| core::array::from_fn(|k| g[(i, k)]));
+        let d1: [f64; 5] = core::array::from_fn(|k| d[k]);
         let (mut u2, mut d2) = (SMatrix::<f64, 5, 5>::zeros(), SVector::<f64, 5>::zeros());
-        thornton(&mut w1, &d, &mut w2, &q, &mut u2, &mut d2);
+        thornton(&mut w1, &d1, 5, &mut w2, &q, 3, &mut u2, &mut d2);
         let qm = SMatrix::<f64, 3, 3>::from_diagonal(&SVector::from(q));
         let p2 = f * p * f.transpose() + g * qm * g.transpose();
         assert!((dense(&u2, &d2) - p2).amax() < 1e-12);
+        // Rows with leading zeros (an upper triangular F: the load's and the biases' rows) and
+        // a zero-weight column left out (compacted away, as `propagate` does): the same
+        // formula, with that column's variance zero.
+        let mut ft = f;
+        for i in 0..5 {
+            for j in 0..i {
+                ft[(i, j)] = 0.0;
+            }
+        }
+        let mut dz = d;
+        dz[1] = 0.0;
+        let fu = ft * u;
+        let keep = [0usize, 2, 3, 4];
+        let mut w1 = [[0.0f64; 5]; 5];
+        let mut d1 = [0.0f64; 5];
+        for (c, k) in keep.iter().enumerate() {
+            d1[c] = dz[*k];
+            for i in 0..5 {
+                w1[i][c] = fu[(i, *k)];
+            }
+        }
+        let mut w2: [[f64; 3]; 5] = core::array::from_fn(|i| core::array::from_fn(|k| g[(i, k)]));
+        // Only the last two rows feel the noise: leading zeros in the noise block too.
+        for row in w2.iter_mut().take(3) {
+            *row = [0.0; 3];
+        }
+        let mut gz = g;
+        for i in 0..3 {
+            for k in 0..3 {
+                gz[(i, k)] = 0.0;
+            }
+        }
+        thornton(&mut w1, &d1, keep.len(), &mut w2, &q, 3, &mut u2, &mut d2);
+        let p3 = ft * dense(&u, &dz) * ft.transpose() + gz * qm * gz.transpose();
+        assert!((dense(&u2, &d2) - p3).amax() < 1e-12);
     }
 
     /// The load models sample their continuous processes: the stationary variance is
