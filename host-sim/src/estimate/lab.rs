@@ -20,6 +20,7 @@ use super::{
     clamp_stress, constant, core, damage_of, rms_about_mean, EstimatorReport, Truth, N,
     TRUTH_ELEMENTS, TRUTH_TOLERANCE,
 };
+pub use crate::ensemble::Spread;
 use crate::full::{FullSolver, SceneKind};
 use crate::scene::{Scene, SensorSpec};
 use crate::sim::Simulator;
@@ -566,47 +567,6 @@ pub fn lab_member(
         estimators,
     };
     Ok((report, series))
-}
-
-/// Mean, standard deviation, least and greatest of one figure over an ensemble.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Spread {
-    /// Mean over the members.
-    pub mean: f64,
-    /// Sample standard deviation (0 for one member).
-    pub sd: f64,
-    /// Least.
-    pub min: f64,
-    /// Greatest.
-    pub max: f64,
-}
-
-impl Spread {
-    /// The spread of `x` (NaN members ignored; all NaN: NaN).
-    pub fn of(x: &[f64]) -> Self {
-        let v: Vec<f64> = x.iter().copied().filter(|v| !v.is_nan()).collect();
-        if v.is_empty() {
-            return Self {
-                mean: f64::NAN,
-                sd: f64::NAN,
-                min: f64::NAN,
-                max: f64::NAN,
-            };
-        }
-        let n = v.len() as f64;
-        let mean = v.iter().sum::<f64>() / n;
-        let sd = if v.len() > 1 {
-            (v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0)).sqrt()
-        } else {
-            0.0
-        };
-        Self {
-            mean,
-            sd,
-            min: v.iter().copied().fold(f64::INFINITY, f64::min),
-            max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        }
-    }
 }
 
 /// One estimator over a [`LabEnsemble`]'s members.
