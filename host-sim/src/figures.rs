@@ -195,7 +195,14 @@ impl PlotData {
         for (k, p) in pts.iter().enumerate() {
             c2[k + 1] = c2[k] + p.1;
         }
+        // Only where the kernel (half-width `window`) lies inside the run: a truncated one
+        // near the start averages the ring-up into t = 0 and shows energy at rest.
+        let (first, last) = match (b.first(), b.last()) {
+            (Some(f), Some(l)) => (f.t0, l.t1),
+            _ => (0.0, 0.0),
+        };
         let pts = (0..pts.len())
+            .filter(|&k| mid[k] >= first + window && mid[k] <= last - window)
             .map(|k| {
                 let lo = mid.partition_point(|&t| t < mid[k] - 0.5 * window);
                 let hi = mid.partition_point(|&t| t <= mid[k] + 0.5 * window);
@@ -393,19 +400,21 @@ pub fn run_plots(
                 }
                 let mut p = vec![
                     Panel::new(
-                        &format!("Energy from rest: beam → ball (running means, 2 × {w} s)"),
+                        &format!(
+                            "Energy from rest: beam → ball ({w} s running mean, applied twice)"
+                        ),
                         "t [s]",
                         "E [mJ]",
                         transfer,
                     ),
                     Panel::new(
-                        &format!("Beam (running means, 2 × {w} s)"),
+                        &format!("Beam ({w} s running mean, applied twice)"),
                         "t [s]",
                         "E [mJ]",
                         vec![m("strain Δ", 5), m("kinetic", 6), m("potential Δ", 7)],
                     ),
                     Panel::new(
-                        &format!("Tip mass (running means, 2 × {w} s)"),
+                        &format!("Tip mass ({w} s running mean, applied twice)"),
                         "t [s]",
                         "E [mJ]",
                         vec![m("kinetic", 8), m("potential Δ", 9)],
@@ -413,7 +422,7 @@ pub fn run_plots(
                 ];
                 if has_ball {
                     p.push(Panel::new(
-                        &format!("Ball (running means, 2 × {w} s)"),
+                        &format!("Ball ({w} s running mean, applied twice)"),
                         "t [s]",
                         "E [mJ]",
                         vec![m("kinetic", 10), m("potential Δ", 11)],
