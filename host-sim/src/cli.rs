@@ -118,9 +118,12 @@ pub enum Command {
     /// a wind-like tip force; read by the scene's `[[sensors]]`; the extended Kalman filter
     /// (core, 3 elements, f32, calibrated) with each sensor set, and the constant-gain
     /// baseline. Prints per estimator the stress RMS error, the Miner damage ratio, the mean
-    /// NIS and the health verdict; `--json` for the same as JSON; `--out` for CSV, JSON and
-    /// plots; `--table` for the regimes × sensor sets × estimators table of
-    /// docs/monitoring.md.
+    /// NIS, the health verdict (the monitor's own check on the device) and a grade against the
+    /// truth: each quality figure (NIS, coverage of ±2 sd, innovation ratio, stress error,
+    /// damage ratio) beside its expected range with ok / poor / failed, the grade the worst of
+    /// them; `--json` for the same as JSON (`quality`, `grade`); `--out` for CSV, JSON and
+    /// plots (`estimate_*` or, with `--lab`, `lab*` files); `--table` for the regimes × sensor
+    /// sets × estimators table of docs/monitoring.md.
     Estimate(EstimateArgs),
     /// Packages the reduced model of a scene as an FMI 3.0 or 2.0 co-simulation FMU (inputs:
     /// base acceleration, tip load; outputs: tip deflection and acceleration, root stress,
@@ -414,7 +417,8 @@ pub struct TuneArgs {
     /// Target ball / beam frequency ratio.
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub ratio: f64,
-    /// Write the scene with the tuned R (and name "tuned") to this TOML file.
+    /// Write the scene with the tuned R (and name "tuned") to this TOML file (a `[ball]`
+    /// scene; an `[arm]` scene only gets the ball it would need printed).
     #[arg(long)]
     pub write: Option<PathBuf>,
     /// Machine-readable output (JSON on stdout).

@@ -94,6 +94,8 @@ pub struct PlotData {
     has_ball: bool,
     /// The first row's beam strain energy \[J\] (the energies are plotted from it).
     strain0: Option<f64>,
+    /// The first row's tip deflection, the static one \[mm\] (the tip is plotted about it).
+    tip0: Option<f64>,
 }
 
 impl PlotData {
@@ -109,6 +111,7 @@ impl PlotData {
             fft: VecDeque::new(),
             has_ball: false,
             strain0: None,
+            tip0: None,
         }
     }
 
@@ -116,6 +119,7 @@ impl PlotData {
     pub fn push(&mut self, r: &Row) {
         self.has_ball |= r.ball_angle.is_finite();
         let strain0 = *self.strain0.get_or_insert(r.energies.beam_strain);
+        self.tip0.get_or_insert(1e3 * r.tip_deflection);
         let v = fields(r, strain0);
         match self.buckets.last_mut() {
             Some(b) if b.n < self.per_bucket => b.merge(&Bucket::of(r.t, v)),
@@ -195,7 +199,14 @@ impl PlotData {
         for (k, p) in pts.iter().enumerate() {
             c2[k + 1] = c2[k] + p.1;
         }
+        // Only where the kernel (half-width `window`) lies inside the run: a truncated one
+        // near the start averages the ring-up into t = 0 and shows energy at rest.
+        let (first, last) = match (b.first(), b.last()) {
+            (Some(f), Some(l)) => (f.t0, l.t1),
+            _ => (0.0, 0.0),
+        };
         let pts = (0..pts.len())
+            .filter(|&k| mid[k] >= first + window && mid[k] <= last - window)
             .map(|k| {
                 let lo = mid.partition_point(|&t| t < mid[k] - 0.5 * window);
                 let hi = mid.partition_point(|&t| t <= mid[k] + 0.5 * window);
@@ -206,13 +217,18 @@ impl PlotData {
     }
 
     fn envelope(&self, label: &str, i: usize, scale: f64) -> Series {
+        self.envelope_about(label, i, scale, 0.0)
+    }
+
+    /// The min/max envelope of quantity `i`, scaled, less `offset` (after scaling).
+    fn envelope_about(&self, label: &str, i: usize, scale: f64, offset: f64) -> Series {
         let mut pts = Vec::with_capacity(2 * self.buckets.len());
         for b in &self.buckets {
             if b.lo[i] <= b.hi[i] {
                 let t = 0.5 * (b.t0 + b.t1);
-                pts.push((t, scale * b.lo[i]));
+                pts.push((t, scale * b.lo[i] - offset));
                 if b.hi[i] > b.lo[i] {
-                    pts.push((t, scale * b.hi[i]));
+                    pts.push((t, scale * b.hi[i] - offset));
                 }
             }
         }
@@ -298,12 +314,20 @@ pub fn run_plots(
     for plot in plots {
         let (name, panels, rows_cols, size) = match plot {
             Plot::Time => {
+                // About the static sag, so that the base's motion and the tip's share a scale
+                // (a 0.2 mm decay under a −16 mm sag was a flat line).
+                let tip0 = data.tip0.unwrap_or(0.0);
                 let mut p = vec![Panel::new(
                     "Beam tip",
                     "t [s]",
                     "y [mm]",
                     vec![
-                        data.envelope("deflection (relative)", 0, 1.0),
+                        data.envelope_about(
+                            &format!("tip deflection (relative to the base) − static {tip0:.3} mm"),
+                            0,
+                            1.0,
+                            tip0,
+                        ),
                         data.envelope("base y_b", 1, 1.0),
                     ],
                 )];
@@ -393,19 +417,21 @@ pub fn run_plots(
                 }
                 let mut p = vec![
                     Panel::new(
-                        &format!("Energy from rest: beam → ball (running means, 2 × {w} s)"),
+                        &format!(
+                            "Energy from rest: beam → ball ({w} s running mean, applied twice)"
+                        ),
                         "t [s]",
                         "E [mJ]",
                         transfer,
                     ),
                     Panel::new(
-                        &format!("Beam (running means, 2 × {w} s)"),
+                        &format!("Beam ({w} s running mean, applied twice)"),
                         "t [s]",
                         "E [mJ]",
                         vec![m("strain Δ", 5), m("kinetic", 6), m("potential Δ", 7)],
                     ),
                     Panel::new(
-                        &format!("Tip mass (running means, 2 × {w} s)"),
+                        &format!("Tip mass ({w} s running mean, applied twice)"),
                         "t [s]",
                         "E [mJ]",
                         vec![m("kinetic", 8), m("potential Δ", 9)],
@@ -413,7 +439,7 @@ pub fn run_plots(
                 ];
                 if has_ball {
                     p.push(Panel::new(
-                        &format!("Ball (running means, 2 × {w} s)"),
+                        &format!("Ball ({w} s running mean, applied twice)"),
                         "t [s]",
                         "E [mJ]",
                         vec![m("kinetic", 10), m("potential Δ", 11)],

@@ -876,8 +876,8 @@ impl Ctx {
             panels.push(Panel::new(
                 &format!("{}: tip error (default − reference)", self.all[s].title),
                 "t [s]",
-                "[µm]",
-                vec![Series::line("", pts(&|j| (c.tip[j] - r.tip[j]) * 1e6))],
+                "[mm]",
+                vec![Series::line("", pts(&|j| (c.tip[j] - r.tip[j]) * 1e3))],
             ));
         }
         render(

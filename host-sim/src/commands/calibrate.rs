@@ -230,6 +230,8 @@ pub fn identify(a: &IdentifyArgs) -> Result<()> {
     };
     let rec = read_csv(&a.csv, &a.time_column, &a.column)?;
     let id = identify_record(&rec, a.record, band, &a.column)?;
+    // `decay` or `ambient`, as the option spells it.
+    let kind = format!("{:?}", a.record).to_lowercase();
     let mut written = None;
     if let Some((mut dir, name)) = out {
         let text = format!(
@@ -237,7 +239,7 @@ pub fn identify(a: &IdentifyArgs) -> Result<()> {
              # uncertainties. Use with `host-sim calibrate --from-identified <this file>`.\n{}",
             a.csv.display(),
             a.column,
-            a.record,
+            kind,
             toml::to_string(&id)?
         );
         written = Some(dir.write(&name, &text)?);
@@ -247,12 +249,11 @@ pub fn identify(a: &IdentifyArgs) -> Result<()> {
         println!("{}", serde_json::to_string(&id)?);
     } else {
         println!(
-            "record {} column {}: {} samples at {} s ({:?})",
+            "record {} column {}: {} samples at {} s ({kind} record)",
             a.csv.display(),
             a.column,
             rec.x.len(),
             rec.dt,
-            a.record
         );
         println!(
             "f1   = {:.6} ± {:.6} Hz ({:.3} %)",
@@ -268,10 +269,9 @@ pub fn identify(a: &IdentifyArgs) -> Result<()> {
             100.0 * id.zeta_uncertainty
         );
         println!(
-            "fit window {:.3} … {:.3} s, residual {:.3} of the signal RMS{}",
+            "fit window {:.3} … {:.3} s{}",
             id.window.0,
             id.window.1,
-            id.residual_ratio,
             if id.triggers > 0 {
                 format!(", {} random-decrement triggers", id.triggers)
             } else {
@@ -288,9 +288,22 @@ pub fn identify(a: &IdentifyArgs) -> Result<()> {
                 q.grade.word()
             );
         }
+        // The worst grade says how far to trust a usable result.
+        let worst = id.quality.iter().map(|q| q.grade).max_by_key(|g| *g as u8);
+        let weak: Vec<&str> = id
+            .quality
+            .iter()
+            .filter(|q| Some(q.grade) == worst && q.grade != Grade::Ok)
+            .map(|q| q.figure.as_str())
+            .collect();
         match id.verdict {
-            Verdict::Usable => println!("verdict: usable"),
-            Verdict::Unusable => println!("verdict: UNUSABLE"),
+            Verdict::Usable if weak.is_empty() => println!("verdict: usable (every figure ok)"),
+            Verdict::Usable => println!(
+                "verdict: usable, with care: {} {}",
+                weak.join(", "),
+                worst.map_or("", |g| g.word())
+            ),
+            Verdict::Unusable => println!("verdict: UNUSABLE ({})", id.reasons.join("; ")),
         }
         if let Some(p) = written {
             println!("wrote {}", p.display());

@@ -4,11 +4,12 @@
 use crate::cli::EstimateArgs;
 use crate::estimate::arm::TwinSeries;
 use crate::estimate::lab::LabSeries;
-use crate::estimate::{EstimatorReport, LabReport, TwinReport};
+use crate::estimate::{EstimatorReport, LabReport, Quality, TwinReport};
 use crate::output::{OutputDir, Status};
 use crate::plot::{render, Panel, Series};
 use crate::scene::Scene;
 use anyhow::{bail, Result};
+use serde_json::{json, Value};
 
 /// Runs the command.
 /// Most steps a study runs: the truth, the estimators and their histories are held in memory
@@ -74,10 +75,10 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
         let (r, series) = crate::estimate::lab(&scene, duration, a.tip_force, baseline)?;
         if let Some(mut dir) = out.take() {
             write_lab_files(&mut dir, &r, &series)?;
-            dir.commit(Status::Complete, serde_json::to_value(&r)?)?;
+            dir.commit(Status::Complete, graded_json(&r, &r.estimators)?)?;
         }
         if a.json {
-            println!("{}", serde_json::to_string(&r)?);
+            println!("{}", graded_json(&r, &r.estimators)?);
             return Ok(());
         }
         print_lab(&r);
@@ -108,20 +109,84 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             .and_then(|a| a.detail_category().ok())
             .map(|d| (d.name(), d.threshold_ksi() * 6.894_757));
         write_files(&mut dir, &report, &series, threshold)?;
-        dir.commit(Status::Complete, serde_json::to_value(&report)?)?;
+        dir.commit(Status::Complete, graded_json(&report, &report.estimators)?)?;
     }
     if a.json {
-        println!("{}", serde_json::to_string(&report)?);
+        println!("{}", graded_json(&report, &report.estimators)?);
         return Ok(());
     }
     print_twin(&report);
     Ok(())
 }
 
+/// The worst word among an estimator's quality figures (`failed` > `poor` > `ok`; a figure
+/// the estimator does not have, `none`, is skipped): its grade against the truth.
+pub fn grade(q: &[Quality]) -> &'static str {
+    let rank = |w: &str| match w {
+        "failed" => 2,
+        "poor" => 1,
+        _ => 0,
+    };
+    q.iter()
+        .filter(|f| f.word != "none")
+        .map(|f| f.word)
+        .max_by_key(|w| rank(w))
+        .unwrap_or("ok")
+}
+
+/// The estimator the top-level verdict is about: the extended Kalman filter with the most
+/// sensors (all the scene's), the first such (in `--lab`, the one on the free-ball truth).
+fn headline(e: &[EstimatorReport]) -> Option<usize> {
+    e.iter()
+        .enumerate()
+        .filter(|(_, r)| r.estimator == "ekf")
+        .max_by_key(|(i, r)| (r.sensors.len(), std::cmp::Reverse(*i)))
+        .map(|(i, _)| i)
+}
+
+/// A quality figure as a reader reads it: name, value and expected range in the figure's
+/// unit, and why it is missing when the estimator has none.
+fn figure_text(q: &Quality) -> String {
+    let (name, scale, unit, digits, missing) = match q.figure {
+        "nis" => ("NIS", 1.0, "", 2, "none: a constant gain has no covariance"),
+        "within_two_sd" => ("within ±2 sd", 100.0, " %", 1, "none"),
+        "innovation_ratio" => (
+            "innovation RMS / sd",
+            1.0,
+            "",
+            2,
+            "none: no tip accelerometer",
+        ),
+        "stress_rms_error_pct" => ("stress RMS error", 1.0, " %", 1, "none"),
+        "damage_ratio" => ("damage ratio", 1.0, "", 3, "none"),
+        other => (other, 1.0, "", 3, "none"),
+    };
+    if q.word == "none" || !q.value.is_finite() {
+        return format!("{name} –, {missing}");
+    }
+    let [lo, hi] = q.expected;
+    let range = if lo == 0.0 {
+        format!("≤ {}{unit}", fmt_bound(hi * scale))
+    } else {
+        format!("{}–{}{unit}", fmt_bound(lo * scale), fmt_bound(hi * scale))
+    };
+    format!(
+        "{name} {:.digits$}{unit} (expected {range}): {}",
+        q.value * scale,
+        q.word
+    )
+}
+
+/// A range bound with the digits it needs (0.5, 2, 0.71, 90, 99).
+fn fmt_bound(x: f64) -> String {
+    let two = format!("{x:.2}");
+    two.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 /// The per-estimator table of a study.
 fn print_estimators(e: &[EstimatorReport]) {
     println!(
-        "  {:<14} {:<12} {:<34} {:<7} {:>10} {:>8} {:>7} {:>9} {:>11}",
+        "  {:<14} {:<12} {:<34} {:<7} {:>10} {:>8} {:>7} {:>9} {:>8} {:>8}",
         "estimator",
         "model",
         "sensors",
@@ -129,34 +194,85 @@ fn print_estimators(e: &[EstimatorReport]) {
         "RMS err %",
         "damage",
         "NIS",
-        "verdict",
+        "health",
+        "grade",
         "clipped"
     );
     for r in e {
+        let nis = if r.nis.is_finite() {
+            format!("{:.2}", r.nis)
+        } else {
+            "–".into()
+        };
         println!(
-            "  {:<14} {:<12} {:<34} {:<7} {:>10.1} {:>8.3} {:>7.2} {:>9} {:>11}",
+            "  {:<14} {:<12} {:<34} {:<7} {:>10.1} {:>8.3} {:>7} {:>9} {:>8} {:>8}",
             r.estimator,
             r.model,
             r.sensors.join("+"),
             r.truth,
             r.stress_rms_error_pct,
             r.damage_ratio,
-            r.nis,
+            nis,
             r.verdict,
+            grade(&r.quality),
             r.clipped.iter().sum::<usize>()
         );
-        let figures: Vec<String> = r
-            .quality
-            .iter()
-            .map(|q| {
-                format!(
-                    "{} {:.3} (expected {:.2}–{:.2}): {}",
-                    q.figure, q.value, q.expected[0], q.expected[1], q.word
-                )
-            })
-            .collect();
+        let figures: Vec<String> = r.quality.iter().map(figure_text).collect();
         println!("      {}", figures.join("; "));
     }
+    println!(
+        "  health: the monitor's own check on the device (a run is degraded or failed when ≥ 1 % of its samples are); grade: the worst of the figures below each row, against the truth (ok inside the expected range, poor inside a wider one, failed outside)"
+    );
+}
+
+/// The closing verdict lines: the headline filter's grade against the truth (with the figures
+/// that set it) and its health check.
+fn print_verdict(e: &[EstimatorReport], what: &str) {
+    let Some(r) = headline(e).map(|i| &e[i]) else {
+        return;
+    };
+    let g = grade(&r.quality);
+    let why: Vec<String> = r
+        .quality
+        .iter()
+        .filter(|q| q.word == g && g != "ok")
+        .map(|q| {
+            let t = figure_text(q);
+            t.trim_end_matches(&format!(": {g}")).to_string()
+        })
+        .collect();
+    let [ok, degraded, failed] = r.verdict_fractions;
+    println!(
+        "verdict ({what}, {} {}): grade against the truth {g}{}; health {} ({:.1} % of samples ok, {:.1} % degraded, {:.1} % failed)",
+        r.estimator,
+        r.sensors.join("+"),
+        if why.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", why.join(", "))
+        },
+        r.verdict,
+        100.0 * ok,
+        100.0 * degraded,
+        100.0 * failed
+    );
+}
+
+/// The report as JSON with each estimator's `grade` (the worst of its `quality` words) and
+/// the top-level `grade` (the headline filter's, the one `verdict` is about).
+fn graded_json<T: serde::Serialize>(r: &T, e: &[EstimatorReport]) -> Result<Value> {
+    let mut v = serde_json::to_value(r)?;
+    if let Some(list) = v.get_mut("estimators").and_then(Value::as_array_mut) {
+        for (j, r) in list.iter_mut().zip(e) {
+            if let Some(o) = j.as_object_mut() {
+                o.insert("grade".into(), json!(grade(&r.quality)));
+            }
+        }
+    }
+    if let (Some(o), Some(i)) = (v.as_object_mut(), headline(e)) {
+        o.insert("grade".into(), json!(grade(&e[i].quality)));
+    }
+    Ok(v)
 }
 
 fn print_setup(s: &crate::estimate::filter::Setup) {
@@ -198,10 +314,7 @@ fn print_lab(r: &LabReport) {
     );
     print_setup(&r.setup);
     print_estimators(&r.estimators);
-    println!(
-        "verdict (filter with all sensors, free truth): {}",
-        r.verdict
-    );
+    print_verdict(&r.estimators, "filter with all sensors, free truth");
 }
 
 fn print_twin(r: &TwinReport) {
@@ -215,7 +328,7 @@ fn print_twin(r: &TwinReport) {
     );
     print_setup(&r.setup);
     print_estimators(&r.estimators);
-    println!("verdict (filter with all sensors): {}", r.verdict);
+    print_verdict(&r.estimators, "filter with all sensors");
 }
 
 /// `lab.csv`, `lab.json` and `lab_stress.png` of the lab study.
@@ -248,7 +361,10 @@ fn write_lab_files(dir: &mut OutputDir, r: &LabReport, s: &LabSeries) -> Result<
         csv.push('\n');
     }
     dir.write("lab.csv", &csv)?;
-    dir.write("lab.json", &serde_json::to_string_pretty(r)?)?;
+    dir.write(
+        "lab.json",
+        &serde_json::to_string_pretty(&graded_json(r, &r.estimators)?)?,
+    )?;
     let mpa = |v: &[f64]| -> Vec<(f64, f64)> {
         s.time.iter().zip(v).map(|(t, x)| (*t, x / 1e6)).collect()
     };
@@ -268,46 +384,69 @@ fn write_lab_files(dir: &mut OutputDir, r: &LabReport, s: &LabSeries) -> Result<
     let mut panels = Vec::new();
     for (title, truth_label, truth_series, idx) in [
         (
-            "extended Kalman filter, ball in the model, all sensors; free-ball truth",
+            "EKF with the ball, all sensors; truth: ball free",
             "truth (ball free)",
             &s.free,
             pick("free-ball", "free", true),
         ),
         (
-            "extended Kalman filter, ball in the model, tip accelerometer; free-ball truth",
+            "EKF with the ball, tip accelerometer; truth: ball free",
             "truth (ball free)",
             &s.free,
             pick("free-ball", "free", false),
         ),
         (
-            "control: ball locked in truth and filter",
+            "control: ball locked in truth and EKF",
             "truth (ball locked)",
             &s.locked,
             pick("locked-ball", "locked", false),
         ),
     ] {
         if let Some(i) = idx {
+            // A 3 s window around the truth's largest swing, where the waveforms can be told
+            // apart (60 s of a 4 Hz arm are a solid band); the residual over the whole run on
+            // its own scale beside it.
+            let s0 = truth_series.first().copied().unwrap_or(0.0);
+            let peak = s
+                .time
+                .iter()
+                .zip(truth_series.iter())
+                .max_by(|a, b| (a.1 - s0).abs().total_cmp(&(b.1 - s0).abs()))
+                .map_or(0.0, |(t, _)| *t);
+            let t_end = s.time.last().copied().unwrap_or(0.0);
+            let w0 = (peak - 1.5).clamp(0.0, (t_end - 3.0).max(0.0));
+            let zoom = |v: &[f64]| -> Vec<(f64, f64)> {
+                mpa(v)
+                    .into_iter()
+                    .filter(|(t, _)| *t >= w0 && *t <= w0 + 3.0)
+                    .collect()
+            };
+            let residual: Vec<f64> = s.estimates[i]
+                .iter()
+                .zip(truth_series.iter())
+                .map(|(e, t)| e - t)
+                .collect();
             panels.push(Panel::new(
-                title,
+                &format!("{title}: t = {w0:.1} … {:.1} s", w0 + 3.0),
                 "t [s]",
                 "root stress [MPa]",
                 vec![
-                    Series::line(truth_label, mpa(truth_series))
+                    Series::line(truth_label, zoom(truth_series))
                         .colored(0)
-                        .width(2),
-                    Series::line(&names[i], mpa(&s.estimates[i]))
+                        .width(3),
+                    Series::line(&names[i], zoom(&s.estimates[i]))
                         .colored(1)
                         .dashed(),
-                    Series::line(
-                        "estimate − truth",
-                        mpa(&s.estimates[i]
-                            .iter()
-                            .zip(truth_series.iter())
-                            .map(|(e, t)| e - t)
-                            .collect::<Vec<f64>>()),
-                    )
-                    .colored(2),
                 ],
+            ));
+            panels.push(Panel::new(
+                &format!(
+                    "estimate − truth, whole run (RMS error {:.1} % of the true dynamic RMS)",
+                    r.estimators[i].stress_rms_error_pct
+                ),
+                "t [s]",
+                "stress [MPa]",
+                vec![Series::line("estimate − truth", mpa(&residual)).colored(2)],
             ));
         }
     }
@@ -315,9 +454,9 @@ fn write_lab_files(dir: &mut OutputDir, r: &LabReport, s: &LabSeries) -> Result<
         "lab scene, tip force {} N at {} Hz: root stress, truth and estimates",
         r.force_amplitude, r.force_frequency
     );
-    let rows = panels.len().max(1);
+    let rows = (panels.len() / 2).max(1);
     dir.write_with("lab_stress.png", |p| {
-        render(p, &title, &panels, rows, 1, (1200, 370 * rows as u32))
+        render(p, &title, &panels, rows, 2, (1600, 370 * rows as u32))
     })?;
     Ok(())
 }
@@ -345,54 +484,96 @@ fn write_files(
         csv.push_str(&format!(",{:.6e}\n", s.measured[i]));
     }
     dir.write("estimate.csv", &csv)?;
-    dir.write("estimate.json", &serde_json::to_string_pretty(r)?)?;
+    dir.write(
+        "estimate.json",
+        &serde_json::to_string_pretty(&graded_json(r, &r.estimators)?)?,
+    )?;
     let mpa = |v: &[f64]| -> Vec<(f64, f64)> {
         s.time.iter().zip(v).map(|(t, x)| (*t, x / 1e6)).collect()
     };
+    let first = s.estimates.first().map_or(&[][..], |v| v.as_slice());
+    let label = names.first().map_or("estimate", |n| n.as_str());
+    // The scores are of the dynamic stress (each minus its own static value): so are the
+    // plots, truth solid and wide, the estimate dashed on top, the residual on its own panel.
+    let (static_truth, static_model) = r.static_stress_mpa;
+    let dynamic = |v: &[f64], s0: f64| -> Vec<f64> { v.iter().map(|x| x - s0 * 1e6).collect() };
+    let (truth_dyn, first_dyn) = (
+        dynamic(&s.truth, static_truth),
+        dynamic(first, static_model),
+    );
+    let residual: Vec<f64> = first_dyn
+        .iter()
+        .zip(&truth_dyn)
+        .map(|(e, t)| e - t)
+        .collect();
+    // The whole run as the RMS over 10 s blocks: 600 s of a 1 Hz arm are a solid band.
+    let block_rms = |v: &[f64]| -> Vec<(f64, f64)> {
+        let mut pts = Vec::new();
+        let (mut sum, mut n, mut t0) = (0.0, 0usize, s.time.first().copied().unwrap_or(0.0));
+        for (t, x) in s.time.iter().zip(v) {
+            sum += (x / 1e6).powi(2);
+            n += 1;
+            if t - t0 >= 10.0 - 1e-9 {
+                pts.push((0.5 * (t0 + t), (sum / n as f64).sqrt()));
+                (sum, n, t0) = (0.0, 0, *t);
+            }
+        }
+        pts
+    };
+    // The 20 s window around the 10 s block with the largest true RMS (where fatigue is).
     let t_end = s.time.last().copied().unwrap_or(0.0);
-    let (w0, w1) = (0.5 * t_end - 10.0, 0.5 * t_end + 10.0);
+    let centre = block_rms(&truth_dyn)
+        .into_iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(0.5 * t_end, |p| p.0);
+    let w0 = (centre - 10.0).clamp(0.0, (t_end - 20.0).max(0.0));
+    let w1 = w0 + 20.0;
     let window = |v: &[f64]| -> Vec<(f64, f64)> {
         mpa(v)
             .into_iter()
             .filter(|(t, _)| *t >= w0 && *t <= w1)
             .collect()
     };
-    let first = s.estimates.first().map_or(&[][..], |v| v.as_slice());
-    let label = names.first().map_or("estimate", |n| n.as_str());
-    // Truth solid and wide, the estimate dashed on top; the residual on its own panel.
-    let residual = |v: &[f64]| -> Vec<f64> { v.iter().zip(&s.truth).map(|(e, t)| e - t).collect() };
+    let statics = format!("static removed: truth {static_truth:.1}, model {static_model:.1} MPa");
     let panels = [
         Panel::new(
-            "root stress, whole run",
+            "dynamic root stress, RMS over 10 s blocks, whole run",
+            "t [s]",
+            "RMS stress [MPa]",
+            vec![
+                Series::line("truth (full solver, N = 16)", block_rms(&truth_dyn))
+                    .colored(0)
+                    .width(3),
+                Series::marked(label, block_rms(&first_dyn))
+                    .colored(1)
+                    .dashed(),
+            ],
+        ),
+        Panel::new(
+            &format!("dynamic root stress, 20 s window at the largest RMS ({statics})"),
             "t [s]",
             "stress [MPa]",
             vec![
-                Series::line("truth (full solver, N = 16)", mpa(&s.truth))
+                Series::line("truth", window(&truth_dyn))
                     .colored(0)
                     .width(2),
-                Series::line(label, mpa(first)).colored(1).dashed(),
+                Series::line(label, window(&first_dyn)).colored(1).dashed(),
             ],
         ),
         Panel::new(
-            "root stress, 20 s window",
+            "residual: estimate − truth (dynamic), 20 s window",
             "t [s]",
             "stress [MPa]",
-            vec![
-                Series::line("truth", window(&s.truth)).colored(0).width(2),
-                Series::line(label, window(first)).colored(1).dashed(),
-            ],
-        ),
-        Panel::new(
-            "residual: estimate − truth, 20 s window",
-            "t [s]",
-            "stress [MPa]",
-            vec![Series::line("estimate − truth", window(&residual(first))).colored(2)],
+            vec![Series::line("estimate − truth", window(&residual)).colored(2)],
         ),
     ];
     dir.write_with("estimate_stress.png", |p| {
         render(
             p,
-            "root stress: truth and estimate (core, N = 3, f32)",
+            &format!(
+                "root stress: truth and estimate (core, N = 3, f32); RMS error {:.1} % of the true dynamic RMS",
+                r.estimators.first().map_or(f64::NAN, |e| e.stress_rms_error_pct)
+            ),
             &panels,
             3,
             1,

@@ -136,6 +136,12 @@ pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
         );
     }
     if s.file.arm.is_some() {
+        if a.write.is_some() {
+            bail!(
+                "`--write` writes the tuned track radius into a `[ball]` scene; an `[arm]` scene (`{}`) gets the ball it would need printed, not a scene",
+                a.scene.scene
+            );
+        }
         // A real arm: the ball this scale would need, and whether it fits in a signal head.
         let t = crate::tune::arm_track_radius(&s, a.ratio)?;
         if a.json {
@@ -147,14 +153,17 @@ pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
                 t.arm_frequency
             );
             println!(
-                "ball at {:.3} x f1          {:.4} Hz needs track radius R = {:.3} m (ρ = {:.3} m)",
-                a.ratio, t.ball_frequency, t.track_radius, t.path_radius
+                "ball at {} × f1            {:.4} Hz needs track radius R = {:.0} mm (ρ = R − r_b = {:.0} mm)",
+                a.ratio,
+                t.ball_frequency,
+                t.track_radius * 1e3,
+                t.path_radius * 1e3
             );
             if !t.buildable_in_signal_head {
                 println!(
-                    "NOT BUILDABLE in a signal head: the track needs {:.2} m of free space, a head offers about {:.2} m",
-                    2.0 * t.track_radius,
-                    crate::tune::SIGNAL_HEAD_SPACE
+                    "NOT BUILDABLE in a signal head: the track needs {:.0} mm of free space, a head offers about {:.0} mm",
+                    2e3 * t.track_radius,
+                    1e3 * crate::tune::SIGNAL_HEAD_SPACE
                 );
             }
         }
@@ -182,7 +191,7 @@ pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
         tuned.file.ball.track_radius = (t.track_radius * 1e9).round() / 1e9;
         let text = format!(
             "# Paper scene with the track radius tuned by `host-sim tune` so that the ball's frequency is\n\
-             # {} x the beam's first frequency in the coupled linearized model ({:.4} Hz / {:.4} Hz).\n{}",
+             # {} × the beam's first frequency in the coupled linearized model ({:.4} Hz / {:.4} Hz).\n{}",
             a.ratio,
             t.ball_frequency,
             t.beam_frequency,

@@ -30,10 +30,11 @@ pub(crate) fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
         let left = ((end - t) / h).round();
         if left < MIN_STEADY_STEPS as f64 {
             bail!(
-                "invalid value for `{key}`: {t} s leaves {} steps of the run ({end} s) for the steady \
+                "invalid value for `{key}`: {t} s leaves {} steps of the run ({} s) for the steady \
                  state; allowed: 0 ≤ transient ≤ {} s (at least {MIN_STEADY_STEPS} steps after it)",
                 left.max(0.0),
-                end - MIN_STEADY_STEPS as f64 * h
+                secs(end),
+                secs(end - MIN_STEADY_STEPS as f64 * h)
             );
         }
         if s.file.excitation.kind == crate::scene::ExcitationType::Harmonic {
@@ -55,14 +56,22 @@ pub(crate) fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
     let default = crate::scene::OutputsSection::default().transient;
     if t == default && t > end / 2.0 {
         eprintln!(
-            "note: the default transient ({default} s) would leave less than half of the run ({end} s); \
+            "note: the default transient ({default} s) would leave less than half of the run ({} s); \
              the steady-state figures use its second half (t ≥ {} s); set {} to choose",
-            end / 2.0,
+            secs(end),
+            secs(end / 2.0),
             crate::output::option("transient")
         );
         return Ok(end / 2.0);
     }
     check(t, "outputs.transient")
+}
+
+/// A time in seconds as a reader writes it: to the microsecond, trailing zeros dropped
+/// (`9.969`, not the sum's `9.969000000000001`).
+fn secs(t: f64) -> String {
+    let s = format!("{t:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
 /// Fewest steps a steady-state window may hold.
@@ -82,6 +91,29 @@ fn stat(v: &Value, k: &str, scale: f64, prec: usize) -> String {
 /// The count under `k` (`mean ± sd (min–max)` in an ensemble's summary).
 fn count(v: &Value, k: &str) -> String {
     crate::ensemble::count_text(v.get(k).unwrap_or(&Value::Null))
+}
+
+/// A friction ratio: plain below 1000 (`4.73`), else in exponent form (`1.162e4`, where a
+/// near-zero normal force makes it large).
+fn ratio(x: f64) -> String {
+    if x.abs() < 1e3 {
+        format!("{x:.2}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+/// The stop impacts of the steady window (what `sweep`'s impacts column counts): their number
+/// from the steady rate of a single run, the rate's statistics in an ensemble's summary.
+fn steady_impacts(s: &Value) -> String {
+    let from = num(s, "steady_from");
+    match s.get("impact_rate_steady").and_then(Value::as_f64) {
+        Some(rate) => format!("{:.0} for t ≥ {from} s", rate * (num(s, "duration") - from)),
+        None => format!(
+            "{}/s for t ≥ {from} s",
+            stat(s, "impact_rate_steady", 1.0, 2)
+        ),
+    }
 }
 
 /// The keys of a run's summary that are settings shared by the members of an ensemble, not
@@ -109,10 +141,11 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
             stat(s, "tip_amplitude_steady", 1e3, 3)
         ),
         format!(
-            "ball angle θ               max {}°; steady {}°; {} stop impacts",
+            "ball angle θ               max {}°; steady {}°; {} stop impacts in the run, {}",
             stat(s, "ball_angle_max_deg", 1.0, 1),
             stat(s, "ball_angle_steady_deg", 1.0, 1),
-            count(s, "impacts")
+            count(s, "impacts"),
+            steady_impacts(s)
         ),
         format!(
             "mean energy [mJ]           beam {} (first {w:.1} s) → {} (last {w:.1} s); ball {} → {}",
@@ -160,8 +193,8 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
         let peak = match crate::ensemble::spread_of(
             c.get("required_friction_max").unwrap_or(&Value::Null),
         ) {
-            Some(p) => format!("{:.3e} ({:.3e}–{:.3e})", p.mean, p.min, p.max),
-            None => format!("{:.3e}", num(c, "required_friction_max")),
+            Some(p) => format!("{} ({}–{})", ratio(p.mean), ratio(p.min), ratio(p.max)),
+            None => ratio(num(c, "required_friction_max")),
         };
         lines.push(format!(
             "rolling without slip       needs more friction than μ = {} {} % of the time ({} % for t ≥ {} s; peak |F_t|/N {peak})",

@@ -140,11 +140,22 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
             "every column over the steady window: {}",
             crate::run::steady_label(from)
         );
-        println!("  f [Hz]   tip Y [mm]   ball max|θ| [deg]   ball θ half p-p [deg]   impacts   flight [%]");
-        for p in &points {
+        // The ball locked (the plot's dashed curve) beside the free ball, when it was run.
+        let locked_head = if locked.is_empty() {
+            ""
+        } else {
+            "   locked: tip Y [mm]"
+        };
+        println!("  f [Hz]   tip Y [mm]   ball max|θ| [deg]   ball θ half p-p [deg]   impacts   flight [%]{locked_head}");
+        for (i, p) in points.iter().enumerate() {
+            let locked_y = match locked.get(i) {
+                Some(l) if l.error.is_none() => format!("   {:19.4}", l.tip_amplitude * 1e3),
+                Some(_) => format!("   {:>19}", "FAILED"),
+                None => String::new(),
+            };
             match &p.error {
                 None => println!(
-                    "  {:6.3}   {:10.4}   {:17.2}   {:21.2}   {:7}   {:10.1}",
+                    "  {:6.3}   {:10.4}   {:17.2}   {:21.2}   {:7}   {:10.1}{locked_y}",
                     p.frequency,
                     p.tip_amplitude * 1e3,
                     p.ball_max_deg,
