@@ -443,9 +443,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// step's cap to the events at its end. An iteration the cap cannot afford is not begun:
     /// the solve returns the iterate it has and the step is flagged (module doc).
     ///
-    /// **Retry.** A Newmark solve with reused factors that ends at `max_iterations` is solved
-    /// again from the same guess with every iteration refreshed ([`NewtonKind::Full`]), its
-    /// work charged to the same cap. Why: far from the solution (a guess thousands of m/s² off,
+    /// **Retry.** A Newmark solve with reused factors that ends at `max_iterations` (and is not
+    /// accepted there by `accept_after_budget`) is solved again from the same guess with every
+    /// iteration refreshed ([`NewtonKind::Full`]), its work charged to the same cap. Why: far from the solution (a guess thousands of m/s² off,
     /// as under a full-scale input that alternates every sample) the first correction leaves
     /// the trust radius, the damping takes the trust-radius cap, and the reused matrix's next
     /// correction points back along the same unknown: the iterate cycles between two points
