@@ -442,7 +442,61 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// ([`crate::Integrator::accept_after_budget`]) and leaves [`work::RESERVE`] units of the
     /// step's cap to the events at its end. An iteration the cap cannot afford is not begun:
     /// the solve returns the iterate it has and the step is flagged (module doc).
+    ///
+    /// **Retry.** A Newmark solve with reused factors that ends at `max_iterations` (and is not
+    /// accepted there by `accept_after_budget`) is solved again from the same guess with every
+    /// iteration refreshed ([`NewtonKind::Full`]), its work charged to the same cap. Why: far from the solution (a guess thousands of m/s² off,
+    /// as under a full-scale input that alternates every sample) the first correction leaves
+    /// the trust radius, the damping takes the trust-radius cap, and the reused matrix's next
+    /// correction points back along the same unknown: the iterate cycles between two points
+    /// (an end-node slope moving ±[`MAX_STEP`] in turn) while the fresh corrections grow
+    /// towards a singular matrix (from 6 to 10¹⁴ in the scaled norm over 90 iterations). A
+    /// matrix refreshed at every iterate does not cycle: that solve converges in 9–11
+    /// iterations. Only a solve that would fail takes this path; every other step is unchanged
+    /// bit for bit. A retry stopped by the cap refuses the step as before.
     pub(crate) fn newton(
+        &self,
+        p: &Problem<'_, T, D>,
+        x: SVector<T, D>,
+        ws: &mut Workspace<T, D>,
+        kind: NewtonKind,
+        step_solve: bool,
+    ) -> Result<Solved<T, D>, Error> {
+        match self.newton_from(p, x, ws, kind, step_solve) {
+            Err(e @ Error::NoConvergence { .. }) if step_solve && kind != NewtonKind::Full => {
+                self.retry_fresh(p, x, ws, e)
+            }
+            r => r,
+        }
+    }
+
+    /// The retry of [`Self::newton`] after the solve from `x` failed with `e`. Kept out of
+    /// line (rare): the ordinary path's code and frame do not carry it.
+    #[inline(never)]
+    #[cold]
+    fn retry_fresh(
+        &self,
+        p: &Problem<'_, T, D>,
+        x: SVector<T, D>,
+        ws: &mut Workspace<T, D>,
+        e: Error,
+    ) -> Result<Solved<T, D>, Error> {
+        let before = core::mem::replace(&mut ws.capped, false);
+        let mut solved = self.newton_from(p, x, ws, NewtonKind::Full, true)?;
+        if core::mem::replace(&mut ws.capped, before) {
+            // The retry stopped at the cap: the step is refused as before, state kept.
+            return Err(e);
+        }
+        if let Error::NoConvergence { iterations, .. } = e {
+            solved.iterations = solved.iterations.saturating_add(iterations);
+        }
+        Ok(solved)
+    }
+
+    /// One Newton solve of [`Self::newton`], without its retry. Not inlined: one copy of the
+    /// iteration's code for both calls.
+    #[inline(never)]
+    fn newton_from(
         &self,
         p: &Problem<'_, T, D>,
         mut x: SVector<T, D>,

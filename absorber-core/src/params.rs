@@ -168,7 +168,8 @@ pub struct Integrator<T> {
     /// the model restart itself ([`crate::Model::step`]). Default
     /// [`work::UNLIMITED`](crate::newton::work::UNLIMITED) (the iteration limits alone);
     /// firmware with a deadline per sample sets it with `events` (`docs/embedded.md`). At
-    /// least [`work::MIN_CAP`](crate::newton::work::MIN_CAP).
+    /// least [`work::MIN_CAP`](crate::newton::work::MIN_CAP), at most
+    /// [`work::UNLIMITED`](crate::newton::work::UNLIMITED) (a step's time stays bounded).
     pub max_work: u32,
     /// What a step whose Newton solve stopped at the work cap does ([`AtCap`]; default
     /// `Take`: measured in `docs/accuracy.md`, "The work cap").
@@ -554,6 +555,12 @@ impl<T: Real> Params<T> {
                 field: "integrator.max_work",
                 reason:
                     "must afford the event tests, one refreshed Newton iteration and the reserve (24 units)",
+            });
+        }
+        if i.max_work > crate::newton::work::UNLIMITED {
+            return Err(Error::InvalidParameter {
+                field: "integrator.max_work",
+                reason: "must be at most 50,000 units (`work::UNLIMITED`, the default: the work the iteration limits allow); more would leave a step unbounded in time",
             });
         }
         non_negative(

@@ -152,3 +152,19 @@ fn failed_step_returns_an_error_and_keeps_the_state() {
     );
     assert_eq!(*m.state(), before);
 }
+
+/// A work cap above `work::UNLIMITED` is refused by name. Before, the C API took
+/// `max_work` = 2,041,904,906 with `max_iterations` = 554,223,915 (a fuzz input, 10⁻⁹ of the
+/// beam's length): one step ran for minutes.
+#[test]
+fn work_cap_above_unlimited_is_refused_by_name() {
+    let mut p = Params::<f64>::default();
+    p.integrator.max_work = absorber_core::newton::work::UNLIMITED;
+    assert!(FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0).is_ok());
+    p.integrator.max_work = 2_041_904_906;
+    p.integrator.max_iterations = 554_223_915;
+    match FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0) {
+        Err(Error::InvalidParameter { field, .. }) => assert_eq!(field, "integrator.max_work"),
+        other => panic!("{other:?}"),
+    }
+}
