@@ -8,13 +8,15 @@
 //!
 //! or (`fit_pole`) a measured first pole f₁, ζ₁ (`host-sim identify`).
 //!
-//! **Fit.** Levenberg–Marquardt on x = (ln κ_b, ln κ_a, μ) with forward-difference Jacobians
-//! (each evaluation is a static solve and two eigenvalue problems of the core in `f64`, a few
-//! milliseconds), residuals the relative errors `model / reference − 1`, box constraints by
-//! clamping (κ_b ∈ [0.5, 2], κ_a ∈ [1e-6, 1], μ ∈ [0, 1], as `Calibration::validate`).
+//! **Fit.** Levenberg–Marquardt ([`crate::lm`]) on x = (ln κ_b, ln κ_a, μ) with
+//! forward-difference Jacobians (each evaluation is a static solve and two eigenvalue problems
+//! of the core in `f64`, a few milliseconds), residuals the relative errors
+//! `model / reference − 1`, box constraints by clamping (κ_b ∈ [0.5, 2], κ_a ∈ [1e-6, 1],
+//! μ ∈ [0, 1], as `Calibration::validate`).
 //! The physics behind the three factors is in docs/model.md ("Calibration").
 
 use crate::identify::{Grade, Quality};
+use crate::lm;
 use crate::scene::{Kind, Precision, Scene};
 use absorber_core::{Calibration, Params};
 use anyhow::{anyhow, bail, Result};
@@ -248,70 +250,57 @@ pub fn fit(
     let mut p = scene.params()?;
     p.calibration = Calibration::default();
     let (uncalibrated, _) = characteristics(scene, &p, elements, false, free_index)?;
-    let eval = |x: &[f64; 3]| -> Result<Vec<f64>> {
-        let mut q = p;
-        q.calibration = calibration_of(x);
-        let (c, _) = characteristics(scene, &q, elements, false, free_index)?;
-        Ok(c.errors(reference))
-    };
-    let cost = |r: &[f64]| r.iter().map(|e| e * e).sum::<f64>();
-    // Start: the locking mostly removed (κ_a = 0.1), the rest at the paper's values.
-    let mut x = [0.0, 0.1f64.ln(), 0.0];
-    let mut r = eval(&x)?;
-    let mut lambda = 1e-3;
-    let mut iterations = 0;
-    let mut capped = true;
-    for _ in 0..MAX_ITERATIONS {
-        iterations += 1;
-        // Forward-difference Jacobian (the eigenvalues are accurate to ~1e-12 relative).
-        let h = 1e-6;
-        let mut jac = nalgebra::DMatrix::<f64>::zeros(r.len(), 3);
-        for j in 0..3 {
-            let mut xp = x;
-            // Step inward at the upper bound of μ and of ln κ_a.
-            let hj = if (j == 2 && x[2] > 0.5) || (j == 1 && x[1] > -1e-3) {
-                -h
+    /// The fit's problem: the errors of the characteristics at x = (ln κ_b, ln κ_a, μ).
+    struct Calibrate<'a> {
+        scene: &'a Scene,
+        p: Params<f64>,
+        elements: usize,
+        free_index: Option<usize>,
+        reference: &'a Characteristics,
+    }
+    impl lm::Problem<3> for Calibrate<'_> {
+        fn residuals(&mut self, x: &[f64; 3]) -> Result<Vec<f64>> {
+            let mut q = self.p;
+            q.calibration = calibration_of(x);
+            let (c, _) = characteristics(self.scene, &q, self.elements, false, self.free_index)?;
+            Ok(c.errors(self.reference))
+        }
+        // Forward differences of 1e-6 (the eigenvalues are accurate to ~1e-12 relative),
+        // inward at the upper bound of μ and of ln κ_a.
+        fn difference_step(&self, x: &[f64; 3], j: usize) -> f64 {
+            if (j == 2 && x[2] > 0.5) || (j == 1 && x[1] > -1e-3) {
+                -1e-6
             } else {
-                h
-            };
-            xp[j] += hj;
-            let rp = eval(&xp)?;
-            for i in 0..r.len() {
-                jac[(i, j)] = (rp[i] - r[i]) / hj;
+                1e-6
             }
         }
-        let rv = nalgebra::DVector::from_column_slice(&r);
-        let g = jac.transpose() * &rv;
-        let a = jac.transpose() * &jac;
-        let mut improved = false;
-        for _ in 0..30 {
-            let mut m = a.clone();
-            for k in 0..3 {
-                m[(k, k)] += lambda * (a[(k, k)] + 1e-12);
-            }
-            let Some(step) = m.lu().solve(&(-&g)) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let mut xn = [x[0] + step[0], x[1] + step[1], x[2] + step[2]];
-            clamp_x(&mut xn);
-            match eval(&xn) {
-                Ok(rn) if cost(&rn) < cost(&r) => {
-                    let gain = cost(&r) - cost(&rn);
-                    x = xn;
-                    r = rn;
-                    lambda = (lambda / 3.0).max(1e-12);
-                    improved = gain > 1e-30;
-                    break;
-                }
-                _ => lambda *= 10.0,
-            }
-        }
-        if !improved || cost(&r).sqrt() < 1e-9 {
-            capped = false;
-            break;
+        fn project(&self, x: &mut [f64; 3]) {
+            clamp_x(x);
         }
     }
+    let mut problem = Calibrate {
+        scene,
+        p,
+        elements,
+        free_index,
+        reference,
+    };
+    let settings = lm::Settings {
+        max_iterations: MAX_ITERATIONS,
+        tries: 30,
+        shrink: 3.0,
+        damping_floor: 1e-12,
+        accept_equal: false,
+        min_gain: 1e-30,
+        min_residual: 1e-9,
+    };
+    // Start: the locking mostly removed (κ_a = 0.1), the rest at the paper's values.
+    let lm::Solution {
+        x,
+        iterations,
+        capped,
+        ..
+    } = lm::minimize(&mut problem, [0.0, 0.1f64.ln(), 0.0], &settings)?;
     let calibration = calibration_of(&x);
     let mut q = p;
     q.calibration = calibration;

@@ -21,6 +21,7 @@
 //! The solver is driven by the processed acceleration, so relative motion, base motion and
 //! energies belong to one consistent record.
 
+use crate::csvio;
 use anyhow::{bail, Context, Result};
 use std::path::Path;
 
@@ -150,9 +151,9 @@ impl Excitation {
         Self::from_csv_checked(text, step, steps).map(|(e, _)| e)
     }
 
-    /// Parses CSV text: two columns `t [s], accel [m/s²]`, separated by a comma (or
-    /// whitespace/semicolon); a UTF-8 byte-order mark, lines starting with `#` and an optional
-    /// header line are skipped. Times must be finite and strictly increasing and start at or
+    /// Parses CSV text ([`crate::csvio`]): two columns `t [s], accel [m/s²]`, separated by a
+    /// comma (or, when the first line has none, a semicolon, a tab or spaces); a UTF-8
+    /// byte-order mark, lines starting with `#` and an optional header line are skipped. Times must be finite and strictly increasing and start at or
     /// before 0; the grid must not extend past the last sample; the samples must be no coarser
     /// than 10 h apart; |accel| at most [`crate::scene::MAX_ACCEL`].
     ///
@@ -189,55 +190,36 @@ impl Excitation {
                 );
             }
         }
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut t = Vec::new();
         let mut a = Vec::new();
-        for (n, line) in text.lines().enumerate() {
-            let line = line.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
+        let mut rows = csvio::Rows::new(text.as_bytes(), csvio::detect_separator(text));
+        let mut first = true;
+        while let Some(row) = rows.next_row()? {
+            let n = row.line();
+            if std::mem::take(&mut first) && row.numbers().is_none() {
+                continue; // header
             }
-            let cols: Vec<&str> = line
-                .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
-                .filter(|s| !s.is_empty())
-                .collect();
-            let parsed: Option<Vec<f64>> = cols.iter().map(|c| c.parse::<f64>().ok()).collect();
-            let Some(vals) = parsed else {
-                if t.is_empty() && n == first_content_line(text) {
-                    continue; // header
-                }
-                bail!("line {}: not a number in `{line}`", n + 1);
-            };
-            if vals.len() != 2 {
+            if row.cells().len() != 2 {
                 bail!(
-                    "line {}: expected 2 columns (t, accel), found {}",
-                    n + 1,
-                    vals.len()
+                    "line {n}: expected 2 columns (t, accel), found {}",
+                    row.cells().len()
                 );
             }
-            let (ti, ai) = (vals[0], vals[1]);
-            if !ti.is_finite() || !ai.is_finite() {
-                bail!("line {}: value is not finite", n + 1);
-            }
+            let (ti, ai) = (row.number(0, "t")?, row.number(1, "accel")?);
             if ai.abs() > crate::scene::MAX_ACCEL {
                 bail!(
-                    "line {}: acceleration {ai} m/s² is beyond what the model represents (allowed: \
+                    "line {n}: acceleration {ai} m/s² is beyond what the model represents (allowed: \
                      |accel| ≤ {} m/s², about 100 g)",
-                    n + 1,
                     crate::scene::MAX_ACCEL
                 );
             }
             if let Some(&prev) = t.last() {
                 if ti <= prev {
-                    bail!(
-                        "line {}: time {ti} does not increase (previous {prev})",
-                        n + 1
-                    );
+                    bail!("line {n}: time {ti} does not increase (previous {prev})");
                 }
                 if ti - prev > 10.0 * step * (1.0 + 1e-9) {
                     bail!(
-                        "line {}: sample interval {:.6} s is coarser than 10 steps ({:.6} s)",
-                        n + 1,
+                        "line {n}: sample interval {:.6} s is coarser than 10 steps ({:.6} s)",
                         ti - prev,
                         10.0 * step
                     );
@@ -474,12 +456,6 @@ fn trapezoid_mean(x: &[f64]) -> f64 {
         [a] => *a,
         [first, .., last] => (x.iter().sum::<f64>() - 0.5 * (first + last)) / (x.len() - 1) as f64,
     }
-}
-
-fn first_content_line(text: &str) -> usize {
-    text.lines()
-        .position(|l| !l.trim().is_empty() && !l.trim().starts_with('#'))
-        .unwrap_or(0)
 }
 
 /// The excitation of a scene, on its step grid, for `steps` steps.

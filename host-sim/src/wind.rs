@@ -24,6 +24,7 @@
 //!   `x0` and `x1` (above a lane), a half-sine pulse of duration τ at each passage time.
 //! - [`LoadComponent::Csv`]: `t, tip_force, line_load` columns, linear in between.
 
+use crate::csvio;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -466,28 +467,29 @@ impl LoadModel {
 
 fn parse_table(text: &str) -> Result<Vec<[f64; 3]>> {
     let mut rows: Vec<[f64; 3]> = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let cols: Vec<&str> = line.split(',').map(str::trim).collect();
-        let nums: Option<Vec<f64>> = cols.iter().map(|c| c.parse::<f64>().ok()).collect();
-        match nums {
-            Some(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => {
-                if let Some(last) = rows.last() {
-                    if v[0] <= last[0] {
-                        bail!("line {}: time must increase", i + 1);
-                    }
-                }
-                rows.push([v[0], v[1], v[2]]);
-            }
+    let mut source = csvio::Rows::new(text.as_bytes(), b',');
+    while let Some(row) = source.next_row()? {
+        let v = match row.numbers() {
+            Some(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => v,
             _ if rows.is_empty() => continue, // a header
-            _ => bail!(
-                "line {}: need three finite numbers `t, tip_force, line_load`",
-                i + 1
+            _ if row.cells().len() != 3 => bail!(
+                "line {}: need three numbers `t, tip_force, line_load`, found {} cells",
+                row.line(),
+                row.cells().len()
             ),
+            // One of the three is not a finite number: the error names it.
+            _ => ["t", "tip_force", "line_load"]
+                .iter()
+                .enumerate()
+                .map(|(i, name)| row.number(i, name))
+                .collect::<Result<Vec<f64>>>()?,
+        };
+        if let Some(last) = rows.last() {
+            if v[0] <= last[0] {
+                bail!("line {}: time must increase", row.line());
+            }
         }
+        rows.push([v[0], v[1], v[2]]);
     }
     if rows.is_empty() {
         bail!("no data rows (`t, tip_force, line_load`)");

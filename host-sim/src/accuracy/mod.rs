@@ -249,17 +249,10 @@ pub struct Noise {
 
 impl Noise {
     /// `count` components spread evenly (jittered) over `[f_lo, f_hi]` Hz, random phases from
-    /// `seed` (SplitMix64), equal amplitudes giving the RMS `rms` \[m/s²\].
+    /// `seed` ([`crate::wind::Rng`]), equal amplitudes giving the RMS `rms` \[m/s²\].
     pub fn new(seed: u64, count: usize, f_lo: f64, f_hi: f64, rms: f64) -> Self {
-        let mut s = seed;
-        let mut uniform = move || {
-            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = s;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            (z >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::wind::Rng::new(seed);
+        let mut uniform = move || rng.uniform();
         let amp = rms * (2.0 / count as f64).sqrt();
         let parts = (0..count)
             .map(|i| {
