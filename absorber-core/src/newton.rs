@@ -436,7 +436,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         linalg::factor_pivoted(&mut slot.dense).ok_or(Error::Singular)
     }
 
-    /// Newton on `x` (from the guess `x`) for problem `p`. Convergence:
+    /// Newton from the guess `x0` for problem `p`. Convergence:
     /// `max_i |c_pos Δx_i| / scale_i ≤ tolerance`. `kind` says whether factors may be reused
     /// (see the module doc). `step_solve`: a Newmark solve, which may accept its budget
     /// ([`crate::Integrator::accept_after_budget`]) and leaves [`work::RESERVE`] units of the
@@ -445,8 +445,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     ///
     /// **Retry.** A Newmark solve with reused factors that ends at `max_iterations` (and is not
     /// accepted there by `accept_after_budget`) is solved again from the same guess with every
-    /// iteration refreshed ([`NewtonKind::Full`]), its work charged to the same cap. Why: far from the solution (a guess thousands of m/s² off,
-    /// as under a full-scale input that alternates every sample) the first correction leaves
+    /// iteration refreshed ([`NewtonKind::Full`]), its work charged to the same cap, in the
+    /// same frame (a helper's frame would stack over the solve's: +360 B of static stack bound
+    /// for the locked ball). Why: far from the solution (a guess thousands of m/s² off, as under
+    /// a full-scale input that alternates every sample) the first correction leaves
     /// the trust radius, the damping takes the trust-radius cap, and the reused matrix's next
     /// correction points back along the same unknown: the iterate cycles between two points
     /// (an end-node slope moving ±[`MAX_STEP`] in turn) while the fresh corrections grow
@@ -457,166 +459,158 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     pub(crate) fn newton(
         &self,
         p: &Problem<'_, T, D>,
-        x: SVector<T, D>,
+        x0: SVector<T, D>,
         ws: &mut Workspace<T, D>,
-        kind: NewtonKind,
-        step_solve: bool,
-    ) -> Result<Solved<T, D>, Error> {
-        match self.newton_from(p, x, ws, kind, step_solve) {
-            Err(e @ Error::NoConvergence { .. }) if step_solve && kind != NewtonKind::Full => {
-                self.retry_fresh(p, x, ws, e)
-            }
-            r => r,
-        }
-    }
-
-    /// The retry of [`Self::newton`] after the solve from `x` failed with `e`. Kept out of
-    /// line (rare): the ordinary path's code and frame do not carry it.
-    #[inline(never)]
-    #[cold]
-    fn retry_fresh(
-        &self,
-        p: &Problem<'_, T, D>,
-        x: SVector<T, D>,
-        ws: &mut Workspace<T, D>,
-        e: Error,
-    ) -> Result<Solved<T, D>, Error> {
-        let before = core::mem::replace(&mut ws.capped, false);
-        let mut solved = self.newton_from(p, x, ws, NewtonKind::Full, true)?;
-        if core::mem::replace(&mut ws.capped, before) {
-            // The retry stopped at the cap: the step is refused as before, state kept.
-            return Err(e);
-        }
-        if let Error::NoConvergence { iterations, .. } = e {
-            solved.iterations = solved.iterations.saturating_add(iterations);
-        }
-        Ok(solved)
-    }
-
-    /// One Newton solve of [`Self::newton`], without its retry. Not inlined: one copy of the
-    /// iteration's code for both calls.
-    #[inline(never)]
-    fn newton_from(
-        &self,
-        p: &Problem<'_, T, D>,
-        mut x: SVector<T, D>,
-        ws: &mut Workspace<T, D>,
-        kind: NewtonKind,
+        mut kind: NewtonKind,
         step_solve: bool,
     ) -> Result<Solved<T, D>, Error> {
         let max = self.params.integrator.max_iterations;
         let tol = self.params.integrator.tolerance;
         ws.reserve = if step_solve { work::RESERVE } else { 0 };
         let half = lit::<T>(0.5);
-        let mut increment = T::zero();
-        let mut previous = T::zero();
-        let mut refresh = false;
-        let mut qva = [SVector::<T, D>::zeros(); 3];
-        let mut dx = SVector::<T, D>::zeros();
-        // The iterations done when the cap stopped the solve (`u32::MAX`: it did not).
-        let mut stopped = u32::MAX;
-        for it in 1..=max {
-            let can = kind != NewtonKind::Full && ws.can_reuse(p);
-            // Near the cap a refresh that cannot be afforded gives way to the factors in hand,
-            // whose correction is then taken if it contracts at all.
-            let fresh = !refresh && can;
-            let forced = !fresh && can && !ws.affords(work::REFRESH + work::SOLVE, ws.reserve);
-            let reuse = fresh || forced;
-            let cost = if reuse { work::RESIDUAL } else { work::REFRESH };
-            if !ws.affords(cost + work::SOLVE, ws.reserve) {
-                // The cap: the iterate so far stands, flagged.
-                ws.stop_at_cap(it > 1, increment, tol);
-                stopped = it - 1;
-                break;
-            }
-            p.at(&x, &mut qva);
-            let [q, v, a] = &qva;
-            if reuse {
-                ws.used += work::RESIDUAL;
-                self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut dx);
-            } else {
-                match self.refresh_at(p, [q, v, a], ws, &mut dx) {
-                    // A matrix the banded LU refuses, under a work cap: the iterate so far.
-                    Err(Error::WorkCap) => {
-                        ws.stop_at_cap(false, increment, tol);
-                        stopped = it - 1;
-                        break;
-                    }
-                    r => r?,
+        // The retry (module doc): a step solve with reused factors that fails is solved again
+        // from the same guess with a fresh matrix at every iteration, in this frame (a helper's
+        // would stack over it). `first`: the failed solve's error; `before`: the cap flag then.
+        let mut first: Option<Error> = None;
+        let mut before = false;
+        'solve: loop {
+            let mut x = x0;
+            // Iterations of the failed solve, counted into the retry's.
+            let spent = match first {
+                Some(Error::NoConvergence { iterations, .. }) => iterations,
+                _ => 0,
+            };
+            let mut increment = T::zero();
+            let mut previous = T::zero();
+            let mut refresh = false;
+            let mut qva = [SVector::<T, D>::zeros(); 3];
+            let mut dx = SVector::<T, D>::zeros();
+            // The iterations done when the cap stopped the solve (`u32::MAX`: it did not).
+            let mut stopped = u32::MAX;
+            for it in 1..=max {
+                let can = kind != NewtonKind::Full && ws.can_reuse(p);
+                // Near the cap a refresh that cannot be afforded gives way to the factors in hand,
+                // whose correction is then taken if it contracts at all.
+                let fresh = !refresh && can;
+                let forced = !fresh && can && !ws.affords(work::REFRESH + work::SOLVE, ws.reserve);
+                let reuse = fresh || forced;
+                let cost = if reuse { work::RESIDUAL } else { work::REFRESH };
+                if !ws.affords(cost + work::SOLVE, ws.reserve) {
+                    // The cap: the iterate so far stands, flagged.
+                    ws.stop_at_cap(it > 1, increment, tol);
+                    stopped = it - 1;
+                    break;
                 }
-            }
-            if !dx.as_slice().iter().all(|z| z.is_finite()) {
-                return Err(Error::NonFiniteState);
-            }
-            dx.neg_mut();
-            ws.solve(&mut dx)?;
-            let norm = self.scaled_norm(&dx, p.c_pos);
-            if forced && norm >= previous {
-                // The factors in hand do not contract and no others can be afforded: the cap.
-                ws.stop_at_cap(it > 1, previous, tol);
-                increment = previous;
-                stopped = it;
-                break;
-            }
-            // Not taken: the reused matrix no longer fits (it did not contract by half, or,
-            // with factors kept from an earlier step (modified Newton) in the solve's first
-            // iteration, where there is nothing to compare with, its correction leaves the
-            // trust radius); refresh at the same iterate.
-            if reuse
-                && !forced
-                && ((it > 1 && norm > previous * half)
-                    || (it == 1 && !ws.built && norm > self.max_step))
-            {
+                p.at(&x, &mut qva);
+                let [q, v, a] = &qva;
+                if reuse {
+                    ws.used += work::RESIDUAL;
+                    self.residual([q, v, a], p.g_eff, p.contact, p.plumb, &mut dx);
+                } else {
+                    match self.refresh_at(p, [q, v, a], ws, &mut dx) {
+                        // A matrix the banded LU refuses, under a work cap: the iterate so far.
+                        Err(Error::WorkCap) => {
+                            ws.stop_at_cap(false, increment, tol);
+                            stopped = it - 1;
+                            break;
+                        }
+                        r => r?,
+                    }
+                }
+                if !dx.as_slice().iter().all(|z| z.is_finite()) {
+                    return Err(Error::NonFiniteState);
+                }
+                dx.neg_mut();
+                ws.solve(&mut dx)?;
+                let norm = self.scaled_norm(&dx, p.c_pos);
+                if forced && norm >= previous {
+                    // The factors in hand do not contract and no others can be afforded: the cap.
+                    ws.stop_at_cap(it > 1, previous, tol);
+                    increment = previous;
+                    stopped = it;
+                    break;
+                }
+                // Not taken: the reused matrix no longer fits (it did not contract by half, or,
+                // with factors kept from an earlier step (modified Newton) in the solve's first
+                // iteration, where there is nothing to compare with, its correction leaves the
+                // trust radius); refresh at the same iterate.
+                if reuse
+                    && !forced
+                    && ((it > 1 && norm > previous * half)
+                        || (it == 1 && !ws.built && norm > self.max_step))
+                {
+                    increment = norm;
+                    refresh = true;
+                    continue;
+                }
+                // Taken; but a matrix that contracts slowly (θ > SLOW) would cost more iterations
+                // than a fresh one, which converges quadratically: refresh at the next iteration.
+                refresh = reuse && it > 1 && norm > previous * self.slow;
+                let lambda = if norm > self.max_step {
+                    self.damping(p, &x, &dx, norm, ws)
+                } else {
+                    T::one()
+                };
+                x.axpy(lambda, &dx, T::one());
                 increment = norm;
-                refresh = true;
-                continue;
+                // A fresh matrix's correction converges quadratically: what is left after it is far
+                // below `tol`. A reused one's converges linearly with the observed contraction
+                // θ = ‖dx_k‖/‖dx_{k−1}‖, and leaves ≈ θ/(1−θ)‖dx_k‖ (Hairer & Wanner, *Solving
+                // ODEs II*, IV.8): demand that be below `tol`/100 too, so that the solution is as
+                // close to the exact discrete one as full Newton's.
+                let settled = !reuse || it == 1 || {
+                    let theta = norm / previous;
+                    theta * norm <= (T::one() - theta) * self.settle
+                };
+                if norm <= tol && settled {
+                    if first.is_some() {
+                        ws.capped = before;
+                    }
+                    return Ok(Solved {
+                        x,
+                        iterations: it.saturating_add(spent),
+                        increment,
+                    });
+                }
+                previous = norm;
             }
-            // Taken; but a matrix that contracts slowly (θ > SLOW) would cost more iterations
-            // than a fresh one, which converges quadratically: refresh at the next iteration.
-            refresh = reuse && it > 1 && norm > previous * self.slow;
-            let lambda = if norm > self.max_step {
-                self.damping(p, &x, &dx, norm, ws)
-            } else {
-                T::one()
-            };
-            x.axpy(lambda, &dx, T::one());
-            increment = norm;
-            // A fresh matrix's correction converges quadratically: what is left after it is far
-            // below `tol`. A reused one's converges linearly with the observed contraction
-            // θ = ‖dx_k‖/‖dx_{k−1}‖, and leaves ≈ θ/(1−θ)‖dx_k‖ (Hairer & Wanner, *Solving
-            // ODEs II*, IV.8): demand that be below `tol`/100 too, so that the solution is as
-            // close to the exact discrete one as full Newton's.
-            let settled = !reuse || it == 1 || {
-                let theta = norm / previous;
-                theta * norm <= (T::one() - theta) * self.settle
-            };
-            if norm <= tol && settled {
+            if stopped != u32::MAX {
+                if let Some(e) = first {
+                    // The retry stopped at the cap: the step is refused as before, state kept.
+                    ws.capped = before;
+                    return Err(e);
+                }
                 return Ok(Solved {
                     x,
-                    iterations: it,
+                    iterations: stopped,
                     increment,
                 });
             }
-            previous = norm;
-        }
-        if stopped != u32::MAX {
-            return Ok(Solved {
-                x,
-                iterations: stopped,
-                increment,
-            });
-        }
-        if self.params.integrator.accept_after_budget && step_solve {
-            return Ok(Solved {
-                x,
+            if self.params.integrator.accept_after_budget && step_solve {
+                if first.is_some() {
+                    ws.capped = before;
+                }
+                return Ok(Solved {
+                    x,
+                    iterations: max.saturating_add(spent),
+                    increment,
+                });
+            }
+            let e = Error::NoConvergence {
                 iterations: max,
-                increment,
-            });
+                increment: to_f64(increment),
+            };
+            if first.is_some() || !step_solve || kind == NewtonKind::Full {
+                if first.is_some() {
+                    ws.capped = before;
+                }
+                return Err(e);
+            }
+            first = Some(e);
+            before = core::mem::replace(&mut ws.capped, false);
+            kind = NewtonKind::Full;
+            continue 'solve;
         }
-        Err(Error::NoConvergence {
-            iterations: max,
-            increment: to_f64(increment),
-        })
     }
 
     /// Damping factor λ of a Newton correction `dx` larger than the trust radius `MAX_STEP`:

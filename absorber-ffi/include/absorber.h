@@ -475,7 +475,8 @@ typedef struct AbsorberParams {
     double landing_restitution;
     /**
      * Hard cap on the work of one step in work units (`absorber_core::newton::work`: an
-     * assembly with its factorization 16, a residual 5, a back-substitution 1; at least 24).
+     * assembly with its factorization 16, a residual 5, a back-substitution 1; at least 24, at most
+     * `ABSORBER_WORK_UNLIMITED`).
      * A step that reaches it is taken with its iterate and flagged (`ABSORBER_OUTCOME_CAPPED`);
      * default `ABSORBER_WORK_UNLIMITED`. A firmware with a deadline per sample sets
      * `ABSORBER_WORK_DEADLINE` with `ABSORBER_EVENTS_STEP_END` (`docs/embedded.md`).
