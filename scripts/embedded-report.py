@@ -676,7 +676,7 @@ w("")
 w("`fw-free` (flight on) and `fw-free-rolling` (the ball held on the track) run the same "
   "trajectory until the first separation (step 1089, t = 3.27 s); over steps 1–900 (before any "
   "impact or separation) the difference is the per-step check of the normal force (one `atan2` "
-  "for ψ and one `sin_cos` of θ at the step's end). The issue's target: within 3 %.")
+  "for ψ and one `sin_cos` of θ at the step's end). The target: within 3 %.")
 w("")
 w("| profile | `fw-free-rolling`, steps 1–900 | `fw-free`, steps 1–900 | extra per step |")
 w("|---|---:|---:|---:|")
