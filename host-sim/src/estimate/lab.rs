@@ -29,6 +29,7 @@ use absorber_core::monitor::fatigue::DetailCategory;
 use absorber_core::monitor::stress::RootSection;
 use absorber_core::{FreeBall, Loaded, LockedBall, Model, Params};
 use anyhow::{bail, Result};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// The lab study's results.
@@ -646,10 +647,11 @@ pub fn lab_ensemble(
     if members == 0 {
         bail!("invalid ensemble size: 0 (at least 1)");
     }
-    let mut reports = Vec::new();
-    for m in 0..members {
-        reports.push(lab_member(scene, duration, amplitude, baseline, m)?.0);
-    }
+    // The members in parallel, in member order (as the ensemble module's `Ensemble::map`).
+    let reports = (0..members)
+        .into_par_iter()
+        .map(|m| Ok(lab_member(scene, duration, amplitude, baseline, m)?.0))
+        .collect::<Result<Vec<LabReport>>>()?;
     let Some(first) = reports.first() else {
         bail!("invalid ensemble size: 0 (at least 1)");
     };
