@@ -401,7 +401,7 @@ def bit_identical(qemu_text, host_text):
 import tomllib  # noqa: E402  (Python 3.11+)
 
 budget = tomllib.loads((Path(__file__).resolve().parent.parent / "firmware" / "budget.toml").read_text())
-figures, bounds, stress = {}, {}, {}
+figures, bounds, stress, hardest = {}, {}, {}, {}
 for scene, label in SCENES:
     key = KEYS[scene]
     names = read_file(f"fw-{scene}.ops").split()
@@ -409,6 +409,11 @@ for scene, label in SCENES:
     counts = [t for t, _ in paper]
     summ = run_summary(read("fw", scene, "host"))
     runs = [paper]
+    # What the costliest steps spend: the paper run's two and the worst of its stress runs.
+    top = sorted(range(len(paper)), key=lambda i: -paper[i][0])[:2]
+    hardest[key] = [("paper", i + 1, paper[i]) for i in top]
+    # The paper run's mean instructions per step in each operation (for "at no cost" below).
+    op_mean = {n: statistics.fmean(ops[n][1] for _, ops in paper) for n in OPS}
     for skey, sscene, sname in stress_runs():
         if sscene != scene:
             continue
@@ -426,6 +431,9 @@ for scene, label in SCENES:
             "bit_identical": bit_identical(read_file(f"stress-{skey}.qemu"), shost),
         }
         runs.append(rows)
+        i = max(range(len(rows)), key=lambda j: rows[j][0])
+        if len(hardest[key]) < 3 or rows[i][0] > hardest[key][2][2][0]:
+            hardest[key][2:] = [(skey, i + 1, rows[i])]
     # The static work bound: the cap times the most one work unit of any counted operation cost,
     # plus the most the step's other code took (everything outside those operations).
     most = {n: 0 for n in OPS}
@@ -458,7 +466,7 @@ for scene, label in SCENES:
     ops_bound += sum(n * most[op] for op, n in FIXED_OPS.get(scene, {}).items())
     bound = ops_bound + glue
     bounds[key] = {"cap": summ["cap"], "most": most, "cost": cost, "ops": ops_bound, "glue": glue,
-                   "bound": bound, "worst_all": worst_all}
+                   "bound": bound, "worst_all": worst_all, "op_mean": op_mean}
     fl = {}
     for profile, _ in PROFILES:
         e, sc = sections(profile, "empty"), sections(profile, scene)
@@ -588,6 +596,44 @@ for scene, label in SCENES:
     w(f"| `{key}` | {b['cap']} | {c['refreshed iteration']:,} | {c['reused iteration or damping trial']:,} "
       f"| {c['impulse matrix']:,} | {c['test residual']:,} | {c['impulse back-substitution']:,} | {b['ops']:,} "
       f"| {b['glue']:,} | **{b['bound']:,}** | {b['worst_all']:,} |")
+w("")
+w("### What the costliest steps spend")
+w("")
+w("Per bin, the two costliest steps of the paper's run and the costliest of its stress runs, "
+  "with the calls of the operations the work cap charges (an assembly with its banded LU, a "
+  "residual, a back-substitution) and the rest of the step (everything outside them, "
+  "instructions). The free ball's ordinary step (full Newton) is one refreshed iteration and one "
+  "reused: one assembly, one residual, two back-substitutions. The costliest steps refresh the "
+  "matrix a second time (a reused correction that did not contract by half, or an impulse's own "
+  "matrix) and add reused iterations until the estimated remaining error settles; the stress "
+  "runs' costliest are capped or restarting steps, which spend up to the cap.")
+w("")
+w("| bin | run | step | instructions | / bin's paper mean | assemblies + LU | residuals | back-substitutions | rest |")
+w("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+for scene, label in SCENES:
+    key = KEYS[scene]
+    m = figures[key]["mean"]
+    for run, k, (total, ops) in hardest[key]:
+        rest = total - sum(v[1] for v in ops.values())
+        w(f"| `{key}` | {run} | {k:,} | {total:,} | {total / m:.2f} | {ops['assembly'][0]} "
+          f"| {ops['residual'][0]} | {ops['solve'][0]} | {rest:,} |")
+w("")
+w("What making an operation cheaper would do to the worst step of all runs against the paper "
+  "run's mean: the ratio with the named operations at no cost in both (the worst step's calls "
+  "and the mean step's). An operation the worst step calls more often than twice the mean's "
+  "lowers the ratio when it gets cheaper; one it calls less often raises it.")
+w("")
+w("| bin | worst / mean | assembly + LU at no cost | residual at no cost | back-substitution at no cost "
+  "| residual and back-substitution at no cost | every operation at no cost (the rest) |")
+w("|---|---:|---:|---:|---:|---:|---:|")
+FREE = [("assembly", "factor"), ("residual",), ("solve",), ("residual", "solve"), tuple(OPS)]
+for scene, label in SCENES:
+    key = KEYS[scene]
+    m = figures[key]["mean"]
+    total, ops = max((r for rows in [[h[2] for h in hardest[key]]] for r in rows), key=lambda r: r[0])
+    om = bounds[key]["op_mean"]
+    cells = [f"{(total - sum(ops[n][1] for n in f)) / (m - sum(om[n] for n in f)):.3f}" for f in FREE]
+    w(f"| `{key}` | {total / m:.3f} | " + " | ".join(cells) + " |")
 w("")
 w("Pivoting fallback calls in any run (must be 0 under a cap): " + ", ".join(
     f"`{KEYS[s]}` {bounds[KEYS[s]]['most']['fallback']:,}" for s, _ in SCENES) + " (most instructions of one call).")
