@@ -54,7 +54,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                         let side = Side::of(alpha);
                         self.impact_at_end(start, next, side, true, ws, report)?;
                     } else {
-                        *next = self.impact_step(start, next, true, base_accel, ws, report)?;
+                        self.impact_step(start, next, true, base_accel, ws, report)?;
                     }
                 }
             }
@@ -67,7 +67,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                         let side = Side::of(a0);
                         self.impact_at_end(start, next, side, false, ws, report)?;
                     } else {
-                        *next = self.impact_step(start, next, false, base_accel, ws, report)?;
+                        self.impact_step(start, next, false, base_accel, ws, report)?;
                     }
                 }
             }
@@ -119,18 +119,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// Splits a step that crossed a stop (module doc), from the span between the stops
-    /// (`inside`) or from the arc beyond them. Kept out of line (rare): the ordinary step's
-    /// frame does not carry its states.
+    /// (`inside`) or from the arc beyond them: `trial`, the step's trial end, becomes the step
+    /// redone with the impact, and stays the trial on error. Kept out of line (rare): the
+    /// ordinary step's frame does not carry its states (nor a returned one: the result is
+    /// written into `trial` here).
     #[inline(never)]
     fn impact_step(
         &self,
         start: &State<T, D>,
-        trial: &State<T, D>,
+        trial: &mut State<T, D>,
         inside: bool,
         base_accel: T,
         ws: &mut Workspace<T, D>,
         report: &mut StepReport<T>,
-    ) -> Result<State<T, D>, Error> {
+    ) -> Result<(), Error> {
         let h = self.params.integrator.step;
         let stop = self.params.ball.stop_angle;
         let tau;
@@ -179,7 +181,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             report.events.impacts += 1;
         }
         report.impact = Some(impact);
-        Ok(end)
+        *trial = end;
+        Ok(())
     }
 
     /// Fraction τ ∈ \[0, 1\] of the step at which α reaches `target`: root of the cubic Hermite
