@@ -630,7 +630,7 @@ FREE = [("assembly", "factor"), ("residual",), ("solve",), ("residual", "solve")
 for scene, label in SCENES:
     key = KEYS[scene]
     m = figures[key]["mean"]
-    total, ops = max((r for rows in [[h[2] for h in hardest[key]]] for r in rows), key=lambda r: r[0])
+    total, ops = max((h[2] for h in hardest[key]), key=lambda r: r[0])
     om = bounds[key]["op_mean"]
     cells = [f"{(total - sum(ops[n][1] for n in f)) / (m - sum(om[n] for n in f)):.3f}" for f in FREE]
     w(f"| `{key}` | {total / m:.3f} | " + " | ".join(cells) + " |")
