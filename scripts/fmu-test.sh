@@ -3,7 +3,8 @@
 # packages the paper scene as an FMI 3.0 and an FMI 2.0 co-simulation FMU with `host-sim fmu`,
 # installs FMPy into a fresh virtual environment and runs scripts/fmu-check.py (validation,
 # FMPy simulation = `host-sim run` to the CSV's printed digits, state save/restore bit for bit,
-# refused bad input), then the docs' example (examples/fmu/simulate.py). Last, the step's cost
+# refused bad input), then the docs' example (examples/fmu/simulate.py: the chaotic free-ball
+# figure with its ensemble spread) and host-sim's run and ensemble of it. Last, the step's cost
 # through the FMU against the C API: examples/fmu/overhead.c (dlopen of the FMU's library with
 # the standard's function types; the C API linked statically) under valgrind, instructions of
 # 2000 steps minus those of none, per step; fails above 5 % more through the FMU.
@@ -47,6 +48,11 @@ py=$work/venv/bin/python
     --csv "$work/run/paper.csv" --amplitude 0.5e-3 --frequency 4.13
 echo "fmu: the docs' FMPy example"
 "$py" examples/fmu/simulate.py "$work/absorber3.fmu"
+# The same chaotic figure from host-sim (the FMU's model, f64): its own run and an ensemble
+# from perturbed initial ball states, to read the example's figures against.
+echo "fmu: host-sim run --scene paper --ensemble 8 (tip amplitude: member 0, then the ensemble)"
+"$hs" run --scene paper --no-plots --out "$work/run1" | grep '^tip amplitude'
+"$hs" run --scene paper --ensemble 8 --no-plots --out "$work/ens" | grep '^tip amplitude'
 
 echo "fmu: step overhead over the C API (instructions under valgrind)"
 gcc -std=c11 -O2 -Wall -Wextra -Werror -Iabsorber-ffi/include -Iabsorber-fmu/include/fmi \

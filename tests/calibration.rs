@@ -24,7 +24,7 @@ fn calibration_n3() -> Calibration<f64> {
 }
 
 /// Calibrated core, N = 3, against the full solver, N = 16, uncalibrated (the converged model:
-/// N = 12 and 16 agree in f₁ to 2e-6, docs/accuracy.md). Budgets from the issue: f₁ and f₂ of
+/// N = 12 and 16 agree in f₁ to 2e-6, docs/accuracy.md). Budgets (the calibration's targets): f₁ and f₂ of
 /// the locked-ball beam within 0.05 %, static tip sag within 0.1 %; the free-ball beam mode is
 /// fitted too and held to the f₁ budget. The fit itself reaches 5e-7 (printed); the budgets
 /// leave room for a different but equally good optimum, not for a worse model. Uncalibrated,
@@ -114,7 +114,7 @@ fn calibrated_full_solver_agrees_with_calibrated_core() {
 /// acceleration plus white noise of 5 % of its peak. Reference: f₁ from the full solver's
 /// `frequencies()`; ζ₁ = c ω₁ / 2, which is exact for a mode whose stiffness is all bending
 /// and ~1 % high here (gravity and the axial prestress carry a little of the stiffness but not
-/// of the damping). Budgets from the issue: f₁ within 0.2 %, ζ within 10 %; the stated
+/// of the damping). Budgets (identification's targets): f₁ within 0.2 %, ζ within 10 %; the stated
 /// uncertainties must cover the error (3σ).
 #[test]
 fn identification_recovers_f1_within_0_2_percent_and_zeta_within_10_percent_from_full_solver_decay()

@@ -1,5 +1,5 @@
-//! Real and broadband records through the low-damping integrator (issue: "an integrator that
-//! survives real records").
+//! Real and broadband records through the low-damping integrator: an integrator that survives
+//! real records.
 //!
 //! A monitor must run through every record a pole can see. With the trapezoidal rule (γ = ½,
 //! β = ¼) and 0.3 % stiffness-proportional damping the locked scene stops converging at
@@ -11,7 +11,7 @@
 //!
 //! Reference: the full solver (`host_sim::full`, f64) with the same physics — same element
 //! count, the same structural damping, generalized-α ρ∞ = 0.8 — at a six times finer step
-//! (0.5 ms). Budget: the issue's 10 % of the peak tip response, for every model; the printed
+//! (0.5 ms). Budget: 10 % of the peak tip response, for every model; the printed
 //! measurements show how much of it is used (the discretization in time, and f32 rounding).
 
 use absorber_core::scalar::{lit, to_f64};

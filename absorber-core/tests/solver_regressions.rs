@@ -44,7 +44,7 @@ fn modified_newton_runs_600_s_at_resonance_between_4_8_and_5_2_mm() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
-/// The matrix: 6–10 s in every Newton mode before the event handling; 300 s now.
+/// The matrix that failed: 6–10 s in every Newton mode before the event handling; 300 s now.
 #[test]
 fn f32_at_50_mm_runs_300_s_in_every_newton_mode() {
     for kind in [NewtonKind::PerStep, NewtonKind::Full, NewtonKind::Modified] {

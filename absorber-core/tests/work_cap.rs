@@ -80,7 +80,7 @@ fn no_step_exceeds_its_cap_and_no_error_run_outlasts_the_restart_rule() {
 }
 
 /// One sample at −9,059 m/s² in the paper's run: the model is back to converged steps within
-/// ten steps (the bound; measured: 3), and only by the restart rule's own means.
+/// ten steps (the bound a monitor needs; measured: 3), and only by the restart rule's own means.
 #[test]
 fn one_bad_sample_is_followed_by_at_most_ten_error_steps() {
     let mut m = FreeBallModel::<f32, 3, 13>::at_rest(deadline(), 0.0).expect("start");

@@ -76,8 +76,8 @@ pub enum Command {
     /// Frequency response (paper Fig. 10): one run per frequency in parallel, steady-state
     /// amplitudes of the tip [m] and the ball [deg], impacts and flight fraction, every column
     /// over the steady window (t ≥ `outputs.transient` to the end, as `run` and `paper`; or
-    /// `--last`); the plot (in mm) adds the ball locked (the passive case); CSV, PNG and
-    /// `sweep.manifest.json`. A run that fails is marked FAILED (no numbers) in the table, the
+    /// `--last`); table, CSV, JSON and plot (in mm) add the ball locked (the passive case, one
+    /// more run per frequency); CSV, PNG and `sweep.manifest.json`. A run that fails is marked FAILED (no numbers) in the table, the
     /// CSV (`status` column) and the plot (a cross), and the command exits with code 3.
     Sweep(SweepArgs),
     /// Track radius R that puts the ball at half the beam's first frequency (coupled

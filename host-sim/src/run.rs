@@ -84,7 +84,8 @@ pub struct Row {
     pub tip_deflection: f64,
     /// Tip mass rotation ψ \[rad\].
     pub tip_angle: f64,
-    /// Ball orbit angle θ from the downward vertical \[rad\] (NaN without a ball).
+    /// Ball orbit angle θ from the downward vertical \[rad\] (NaN without a free ball: a
+    /// locked ball turns with the tip mass, [`Row::tip_angle`]; so are its rates and spin).
     pub ball_angle: f64,
     /// Ball angle relative to the housing α = θ − ψ \[rad\].
     pub ball_rel_angle: f64,
@@ -133,7 +134,8 @@ pub const CSV_HEADER: &str = "\
 # host-sim run: one row per output step. SI units, angles in rad.
 # t [s]; base_y: base displacement y_b [m]; tip_y: absolute vertical position of the beam end (y_b + deflection) [m];
 # tip_deflection: beam end relative to the base, static sag included [m]; tip_angle: tip mass rotation psi [rad];
-# ball_angle: ball orbit angle theta from the downward vertical [rad]; ball_rel_angle: theta - psi [rad];
+# ball_angle: ball orbit angle theta from the downward vertical [rad]; ball_rel_angle: theta - psi [rad]
+#   (these, the ball's rates and spin are NaN unless the ball is free: a locked ball turns with the tip mass, tip_angle);
 # beam_strain, beam_kinetic, beam_potential, tip_kinetic, tip_potential, ball_kinetic, ball_potential [J]
 #   (kinetic with absolute velocities, potentials as changes from the static state plus the base displacement);
 # iterations: Newton iterations of the step; impact: 1 if the ball hit a stop in the step;
@@ -393,8 +395,17 @@ pub fn simulate_with(
     let spin_ratio = params.ball.path_radius() / params.ball.radius;
     let b0 = exc.at(0);
     let mut sim = build_simulator(scene, b0.accel)?;
+    // A locked ball has no angle of its own: it turns with the tip mass (θ = ψ), which the
+    // `tip_angle` column already gives; its angle columns are NaN, as without a ball.
+    let free = scene.file.kind.free_ball();
     let row = |sim: &dyn Simulator, k: usize, report: Option<&absorber_core::StepReport<f64>>| {
-        let o = sim.observe();
+        let mut o = sim.observe();
+        if !free {
+            o.ball_angle = f64::NAN;
+            o.ball_rate = f64::NAN;
+            o.ball_relative_angle = f64::NAN;
+            o.ball_relative_rate = f64::NAN;
+        }
         let contact = sim.contact_forces();
         let b = exc.at(k);
         Row {
@@ -473,7 +484,14 @@ pub fn run_rows(scene: &Scene, progress: impl FnMut(usize)) -> Result<Vec<Row>> 
 /// to the end of the run; every steady figure of a table row is over this window. The label
 /// their tables and JSON carry.
 pub fn steady_label(from: f64) -> String {
-    format!("steady: t ≥ {from} s to the end")
+    format!("steady: t ≥ {} s to the end", secs(from))
+}
+
+/// A time in seconds as a reader writes it: to the microsecond, trailing zeros dropped
+/// (`4.999`, not the sum's `4.9990000000000006`).
+pub fn secs(t: f64) -> String {
+    let s = format!("{t:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
 /// Summary figures of a run, accumulated row by row in fixed memory.

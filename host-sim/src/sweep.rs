@@ -182,18 +182,26 @@ impl SweepPoint {
     }
 }
 
-/// CSV of a sweep. A failed point has status `failed`, no numbers and the error.
-pub fn csv(points: &[SweepPoint], steady_from: f64) -> String {
+/// CSV of a sweep. A failed point has status `failed`, no numbers and the error;
+/// `locked`: the same frequencies with the ball locked (empty: not run, no free ball), whose
+/// tip amplitude is the `locked_tip_amplitude` column.
+pub fn csv(points: &[SweepPoint], locked: &[SweepPoint], steady_from: f64) -> String {
     let mut s = csv_head(steady_from);
-    for p in points {
-        s.push_str(&csv_row(p));
+    for (i, p) in points.iter().enumerate() {
+        s.push_str(&csv_row(p, locked.get(i)));
     }
     s
 }
 
 /// CSV of an ensemble's sweep: one row per run, the member first (0: the scene itself), then
-/// the columns of [`csv`].
-pub fn csv_members(points: &[Vec<SweepPoint>], e: Ensemble, steady_from: f64) -> String {
+/// the columns of [`csv`] (the locked ball's column is the same in every member's row: a
+/// locked ball has no initial angle to perturb).
+pub fn csv_members(
+    points: &[Vec<SweepPoint>],
+    locked: &[SweepPoint],
+    e: Ensemble,
+    steady_from: f64,
+) -> String {
     let mut s = format!(
         "# ensemble of {} runs per frequency, seed {} (member 0: the scene itself)\n",
         e.k, e.seed
@@ -207,9 +215,9 @@ pub fn csv_members(points: &[Vec<SweepPoint>], e: Ensemble, steady_from: f64) ->
         }
         s.push('\n');
     }
-    for members in points {
+    for (i, members) in points.iter().enumerate() {
         for (m, p) in members.iter().enumerate() {
-            s.push_str(&format!("{m},{}", csv_row(p)));
+            s.push_str(&format!("{m},{}", csv_row(p, locked.get(i))));
         }
     }
     s
@@ -218,27 +226,44 @@ pub fn csv_members(points: &[Vec<SweepPoint>], e: Ensemble, steady_from: f64) ->
 /// The header of [`csv`].
 fn csv_head(steady_from: f64) -> String {
     format!(
-        "# host-sim sweep: every column over the steady window, {} of each run\n{CSV_COLUMNS}",
+        "# host-sim sweep: every column over the steady window, {} of each run\n{CSV_HEADER}",
         crate::run::steady_label(steady_from)
     )
 }
 
-const CSV_COLUMNS: &str = "# frequency [Hz]; status: ok, or failed (then no numbers; error says why); tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
-         # ball_max_deg: max |theta| [deg]; ball_amplitude_deg: half peak-to-peak theta [deg]; impacts;\n\
-         # flight_fraction: share of the window with the ball in flight [-]; max_iterations; error\n\
-         frequency,status,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,flight_fraction,max_iterations,error\n";
+const CSV_HEADER: &str = "# frequency [Hz]; status: ok, or failed (then no numbers; error says why); tip_amplitude: half peak-to-peak tip deflection [m]; tip_mean [m];\n\
+         # ball_max_deg: max |theta| [deg]; ball_amplitude_deg: half peak-to-peak theta [deg] (NaN unless the ball is free); impacts;\n\
+         # flight_fraction: share of the window with the ball in flight [-]; max_iterations;\n\
+         # locked_tip_amplitude: tip_amplitude with the ball locked (the passive absorber) [m], empty without a free ball or when that run failed; error\n\
+         frequency,status,tip_amplitude,tip_mean,ball_max_deg,ball_amplitude_deg,impacts,flight_fraction,max_iterations,locked_tip_amplitude,error\n";
 
-/// One point's CSV row (with its newline).
-fn csv_row(p: &SweepPoint) -> String {
-    if let Some(e) = &p.error {
-        return format!(
-            "{},failed,,,,,,,,{}\n",
-            p.frequency,
-            e.replace([',', '\n'], ";")
-        );
+/// Names of the sweep CSV's columns, in order (the last line of its header).
+pub fn csv_columns() -> Vec<&'static str> {
+    CSV_HEADER
+        .lines()
+        .last()
+        .map(|l| l.split(',').collect())
+        .unwrap_or_default()
+}
+
+/// One point's CSV row (with its newline), with the locked ball's at the same frequency.
+fn csv_row(p: &SweepPoint, locked: Option<&SweepPoint>) -> String {
+    let locked_error = locked.and_then(|l| l.error.as_ref());
+    let locked_y = match locked {
+        Some(l) if l.error.is_none() => format!("{:.6e}", l.tip_amplitude),
+        _ => String::new(),
+    };
+    let error = match (&p.error, locked_error) {
+        (Some(e), _) => e.clone(),
+        (None, Some(e)) => format!("locked ball: {e}"),
+        (None, None) => String::new(),
+    }
+    .replace([',', '\n'], ";");
+    if p.error.is_some() {
+        return format!("{},failed,,,,,,,,{locked_y},{error}\n", p.frequency);
     }
     format!(
-        "{},ok,{:.6e},{:.6e},{:.4},{:.4},{},{:.4},{},\n",
+        "{},ok,{:.6e},{:.6e},{:.4},{:.4},{},{:.4},{},{locked_y},{error}\n",
         p.frequency,
         p.tip_amplitude,
         p.tip_mean,

@@ -266,7 +266,7 @@ fn run_starts_at_the_static_deflection() {
 
 /// `calibrate` round trip: it writes a complete scene that `modes`, `static` and `run` take as
 /// is, whose locked-ball f₁ and sag are the converged full solver's (N = 16: 4.108761 Hz,
-/// −16.12983 mm; the fit reaches 5e-7, the budget is the 0.05 % / 0.1 %).
+/// −16.12983 mm; the fit reaches 5e-7, the budget is the calibration's 0.05 % / 0.1 %).
 #[test]
 fn calibrate_writes_a_scene_that_modes_static_and_run_accept() {
     let out = tmp("calibrated-n3.toml");

@@ -372,7 +372,11 @@ fn failed_points_have_no_numbers() {
         error: Some("step 7 (t = 0.021 s) failed: the solver did not converge".into()),
         ..ok.clone()
     };
-    let csv = host_sim::sweep::csv(&[ok, bad], 20.0);
+    let locked = SweepPoint {
+        tip_amplitude: 0.03,
+        ..ok.clone()
+    };
+    let csv = host_sim::sweep::csv(&[ok, bad], &[locked.clone(), locked], 20.0);
     assert!(
         csv.starts_with(
             "# host-sim sweep: every column over the steady window, steady: t ≥ 20 s to the end"
@@ -382,10 +386,14 @@ fn failed_points_have_no_numbers() {
     let rows: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
     assert!(rows[0].starts_with("frequency,status,"));
     assert!(rows[1].starts_with("4,ok,1.000000e-2,"));
+    assert!(rows[1].ends_with(",3.000000e-2,"), "{}", rows[1]);
     assert_eq!(
         rows[2],
-        "4.1,failed,,,,,,,,step 7 (t = 0.021 s) failed: the solver did not converge"
+        "4.1,failed,,,,,,,,3.000000e-2,step 7 (t = 0.021 s) failed: the solver did not converge"
     );
+    // Every row has as many fields as the header names.
+    let n = host_sim::sweep::csv_columns().len();
+    assert!(rows.iter().all(|r| r.split(',').count() == n), "{csv}");
 }
 
 #[test]
@@ -510,7 +518,19 @@ fn a_sweep_with_a_failed_point_marks_it_and_exits_3() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("1 of 2 sweep runs failed"));
     let csv = std::fs::read_to_string(d.join("sweep.csv")).unwrap();
     assert!(csv.contains("\n3.9,ok,"), "{csv}");
-    assert!(csv.contains("\n4.13,failed,,,,,,,,step "), "{csv}");
+    // No numbers of its own; the locked ball's run at 4.13 Hz did not fail: its column stays.
+    let row = csv.lines().find(|l| l.starts_with("4.13,")).unwrap();
+    let f: Vec<&str> = row.split(',').collect();
+    assert_eq!(
+        f[..9],
+        ["4.13", "failed", "", "", "", "", "", "", ""],
+        "{row}"
+    );
+    assert!(
+        f[9].parse::<f64>().unwrap() > 0.0 && f[10].starts_with("step "),
+        "{row}"
+    );
+    assert!(csv.contains("t ≥ 4.999 s to the end"), "{csv}");
     let m = manifest(&d, "sweep");
     assert_eq!(m["status"], "points-failed");
     assert_eq!(names(&m), ["sweep.csv", "sweep.png"]);
@@ -689,4 +709,55 @@ fn the_time_column_advances_one_step_per_step_with_impacts() {
         let t: f64 = l.split(',').next().unwrap().parse().unwrap();
         assert!((t - k as f64 * 0.003).abs() < 1e-9, "row {k}: t = {t}");
     }
+}
+
+/// A locked ball has no angle of its own: `run` says it is locked in the housing (before: a
+/// "ball angle θ max 8.1°" line that was the tip mass's slope), the JSON has no ball angle
+/// and the CSV's ball columns are NaN while `tip_angle`, which the ball turns with, is there;
+/// the free ball keeps its line.
+#[test]
+fn a_locked_ball_is_reported_as_locked_not_as_an_angle() {
+    let d = dir("locked-ball");
+    let ds = d.to_str().unwrap();
+    let args = [
+        "run",
+        "--kind",
+        "locked",
+        "--duration",
+        "4",
+        "--no-plots",
+        "--out",
+        ds,
+    ];
+    let o = run(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("ball                       locked in the housing"),
+        "{text}"
+    );
+    assert!(!text.contains("ball angle θ"), "{text}");
+    let mut json_args = args.to_vec();
+    json_args.push("--json");
+    let o = run(&json_args);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let s = &v["summary"];
+    assert_eq!(s["ball"], "locked");
+    assert!(s["ball_angle_max_deg"].is_null(), "{s}");
+    let csv = std::fs::read_to_string(d.join("paper.csv")).unwrap();
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    for row in lines {
+        let f: Vec<&str> = row.split(',').collect();
+        for c in ["ball_angle", "ball_rel_angle", "ball_rate", "ball_spin"] {
+            assert_eq!(f[col(c)], "NaN", "{c} in {row}");
+        }
+        let psi: f64 = f[col("tip_angle")].parse().unwrap();
+        assert!(psi.is_finite() && psi != 0.0, "{row}");
+    }
+    let o = run(&["run", "--duration", "4", "--no-plots", "--out", ds]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("ball angle θ               max "), "{text}");
+    let _ = std::fs::remove_dir_all(&d);
 }

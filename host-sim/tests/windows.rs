@@ -53,9 +53,22 @@ fn paper_and_sweep_share_the_steady_window() {
         p["impacts"],
         q["impacts"]
     );
+    // The locked ball (run also without plots): `paper`'s locked run over the same window,
+    // to the last digit, in the JSON and (to its printed digits) in the CSV's column.
+    let p_locked = &json(&["paper", "--duration", "44", "--json"])["locked"];
+    let locked = &s["locked"][0]["tip_amplitude"];
+    assert_eq!(locked, &p_locked["tip_amplitude_steady"]);
     // The CSV header says which window.
     let csv = std::fs::read_to_string(dir.path().join("sweep.csv")).unwrap();
     assert!(csv.lines().next().unwrap().contains("t ≥ 20 s"), "{csv}");
+    let mut rows = csv.lines().filter(|l| !l.starts_with('#'));
+    let head: Vec<&str> = rows.next().unwrap().split(',').collect();
+    let row: Vec<&str> = rows.next().unwrap().split(',').collect();
+    let i = head
+        .iter()
+        .position(|h| *h == "locked_tip_amplitude")
+        .unwrap();
+    assert_eq!(row[i], format!("{:.6e}", locked.as_f64().unwrap()));
 }
 
 /// `fatigue` uses the same window: its header, table and manifest state it, its free-ball

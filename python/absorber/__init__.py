@@ -41,6 +41,7 @@ __all__ = [
     "AbsorberError",
     "BUILT_IN_SCENES",
     "CSV_COLUMNS",
+    "SWEEP_COLUMNS",
     "SceneLike",
     "modes",
     "run",
@@ -56,6 +57,10 @@ SceneLike = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 
 #: Columns of :func:`run`'s result, in the order of the command line's CSV.
 CSV_COLUMNS: tuple = tuple(_absorber.CSV_COLUMNS)
+
+#: Columns of ``host-sim sweep``'s CSV, in order; :func:`sweep` returns one array per column
+#: (``status`` and ``error`` become its ``"errors"`` list).
+SWEEP_COLUMNS: tuple = tuple(_absorber.SWEEP_COLUMNS)
 
 #: Names accepted as built-in scenes.
 BUILT_IN_SCENES: tuple = tuple(_absorber.BUILT_IN_SCENES)
@@ -165,58 +170,64 @@ def sweep(
             ``outputs.transient``).
         jobs: worker threads.
         ensemble: runs per frequency from seeded perturbations of the ball's initial state
-            (``--ensemble``): the arrays are then the means over the members, and
-            ``"spread"`` holds, per statistic, arrays ``"sd"``, ``"min"``, ``"max"``, ``"k"``.
+            (``--ensemble``): the arrays are then the means over the members (but
+            ``locked_tip_amplitude``: one run, a locked ball has no initial angle to perturb),
+            and ``"spread"`` holds, per statistic, arrays ``"sd"``, ``"min"``, ``"max"``, ``"k"``.
         seed: seed of the perturbations (``--seed``).
         **overrides: as for :func:`run` (``amplitude``, ``duration``, …).
 
     Returns:
-        A dict of ``numpy.ndarray`` (one entry per frequency): ``frequency`` [Hz],
-        ``tip_amplitude`` (half peak-to-peak) [m], ``tip_mean`` [m], ``ball_max_deg``,
-        ``ball_amplitude_deg`` [deg], ``impacts``, ``flight_fraction`` (share of the window with
-        the ball in flight) [-], ``max_iterations``; and ``"errors"``: a list
-        with ``None`` for a point that ran, else why it failed (its numbers are then NaN).
+        A dict of ``numpy.ndarray`` (one entry per frequency), one per column of ``host-sim
+        sweep``'s CSV (:data:`SWEEP_COLUMNS`): ``frequency`` [Hz], ``tip_amplitude`` (half
+        peak-to-peak) [m], ``tip_mean`` [m], ``ball_max_deg``, ``ball_amplitude_deg`` [deg]
+        (NaN unless the ball is free), ``impacts``, ``flight_fraction`` (share of the window
+        with the ball in flight) [-], ``max_iterations``, ``locked_tip_amplitude`` (the same
+        run with the ball locked: the passive absorber the command's table and plot compare
+        with, one run per frequency; NaN without a free ball or where that run failed) [m];
+        and ``"errors"``: a list with ``None`` for a point that ran, else why it failed (its
+        numbers are then NaN; a failed locked run is named there too).
 
     Raises:
         AbsorberError: bad scene, frequencies or window.
     """
     f = None if freqs is None else [float(x) for x in np.asarray(freqs, dtype=float).ravel()]
-    points = json.loads(_absorber.sweep(_scene(scene), overrides, f, last, jobs, ensemble, seed))
-    keys = (
-        "frequency",
-        "tip_amplitude",
-        "tip_mean",
-        "ball_max_deg",
-        "ball_amplitude_deg",
-        "flight_fraction",
-    )
+    result = json.loads(_absorber.sweep(_scene(scene), overrides, f, last, jobs, ensemble, seed))
+    points, locked = result["points"], result["locked"]
+    columns = [c for c in SWEEP_COLUMNS if c not in ("status", "error", "locked_tip_amplitude")]
+    counts = ("impacts", "max_iterations")
+    keys = [c for c in columns if c not in counts]
+
+    def number(p: Dict[str, Any], k: str, f: Optional[str] = None) -> float:
+        if p["error"] or p[k] is None:
+            return np.nan
+        return p[k] if f is None else p[k][f]
+
     if ensemble > 1:
-        stats = keys[1:] + ("impacts", "max_iterations")
-
-        def field(p: Dict[str, Any], k: str, f: str) -> float:
-            return np.nan if p["error"] or p[k] is None else p[k][f]
-
-        spread: Dict[str, Any] = {
-            k: np.array([field(p, k, "mean") for p in points], dtype=float) for k in stats
+        stats = keys[1:] + list(counts)
+        out: Dict[str, Any] = {
+            k: np.array([number(p, k, "mean") for p in points], dtype=float) for k in stats
         }
-        spread["frequency"] = np.array([p["frequency"] for p in points], dtype=float)
-        spread["spread"] = {
+        out["spread"] = {
             k: {
-                f: np.array([field(p, k, f) for p in points], dtype=float)
+                f: np.array([number(p, k, f) for p in points], dtype=float)
                 for f in ("sd", "min", "max", "k")
             }
             for k in stats
         }
-        spread["errors"] = [p["error"] for p in points]
-        return spread
-    out: Dict[str, Any] = {
-        k: np.array([np.nan if p["error"] or p[k] is None else p[k] for p in points], dtype=float)
-        for k in keys
-    }
+    else:
+        out = {k: np.array([number(p, k) for p in points], dtype=float) for k in keys}
+        for k in counts:
+            out[k] = np.array([p[k] for p in points], dtype=np.int64)
     out["frequency"] = np.array([p["frequency"] for p in points], dtype=float)
-    for k in ("impacts", "max_iterations"):
-        out[k] = np.array([p[k] for p in points], dtype=np.int64)
-    out["errors"] = [p["error"] for p in points]
+    out["locked_tip_amplitude"] = np.array(
+        [number(locked[i], "tip_amplitude") if locked else np.nan for i in range(len(points))],
+        dtype=float,
+    )
+    errors = [p["error"] for p in points]
+    for i, l in enumerate(locked):
+        if l["error"] and not errors[i]:
+            errors[i] = f"locked ball: {l['error']}"
+    out["errors"] = errors
     return out
 
 

@@ -5,6 +5,7 @@ from typing import Any, Dict, List, Optional, Tuple
 import numpy as np
 
 CSV_COLUMNS: List[str]
+SWEEP_COLUMNS: List[str]
 BUILT_IN_SCENES: List[str]
 
 class AbsorberError(ValueError):
@@ -25,7 +26,7 @@ def sweep(
     scene: Any,
     overrides: Optional[Dict[str, Any]] = None,
     freqs: Optional[List[float]] = None,
-    last: float = 20.0,
+    last: Optional[float] = None,
     jobs: Optional[int] = None,
     ensemble: int = 1,
     seed: int = 1,

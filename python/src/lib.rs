@@ -293,8 +293,10 @@ fn modes<'py>(
     Ok(PyArray1::from_vec(py, f))
 }
 
-/// `sweep`: the points as JSON (one object per frequency, `error` set on a failed one); with
-/// `ensemble` > 1 every number is `{"mean", "sd", "min", "max", "k"}` over the members.
+/// `sweep`: `{"points": [...], "locked": [...]}` as JSON: one object per frequency (`error`
+/// set on a failed one), with `ensemble` > 1 every number of a point `{"mean", "sd", "min",
+/// "max", "k"}` over the members; `locked` the same frequencies with the ball locked (one run
+/// each, as the command's table, CSV and JSON; empty without a free ball).
 #[pyfunction]
 #[pyo3(signature = (scene, overrides=None, freqs=None, last=None, jobs=None, ensemble=1, seed=1))]
 #[allow(clippy::too_many_arguments)]
@@ -311,22 +313,15 @@ fn sweep(
     let s = scene_with(scene, overrides)?;
     let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
     let text = interruptible(py, || -> anyhow::Result<String> {
-        Ok(if e.is_ensemble() {
-            serde_json::to_string(&commands::sweep_ensemble_in_memory(
-                &s,
-                freqs.as_deref(),
-                last,
-                jobs,
-                e,
-            )?)?
+        let f = freqs.as_deref();
+        let (points, locked) = if e.is_ensemble() {
+            let (p, l) = commands::sweep_ensemble_in_memory(&s, f, last, jobs, e)?;
+            (serde_json::to_value(p)?, l)
         } else {
-            serde_json::to_string(&commands::sweep_in_memory(
-                &s,
-                freqs.as_deref(),
-                last,
-                jobs,
-            )?)?
-        })
+            let (p, l) = commands::sweep_in_memory(&s, f, last, jobs)?;
+            (serde_json::to_value(p)?, l)
+        };
+        Ok(serde_json::json!({ "points": points, "locked": locked }).to_string())
     })?
     .map_err(to_py)?;
     Ok(text)
@@ -345,6 +340,7 @@ fn _absorber(m: &Bound<'_, PyModule>) -> PyResult<()> {
     host_sim::output::spell_options_for_python();
     m.add("AbsorberError", m.py().get_type::<AbsorberError>())?;
     m.add("CSV_COLUMNS", host_sim::run::csv_columns())?;
+    m.add("SWEEP_COLUMNS", host_sim::sweep::csv_columns())?;
     m.add("BUILT_IN_SCENES", host_sim::scene::BUILT_IN.to_vec())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(static_summary, m)?)?;

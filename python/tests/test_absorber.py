@@ -168,3 +168,55 @@ def test_sweep_returns_the_flight_fraction_over_the_window():
     c = r["summary"]["contact"]
     assert s["flight_fraction"][0] == pytest.approx(c["flight_fraction_steady"], abs=1e-3)
     assert s["tip_amplitude"][0] == r["summary"]["tip_amplitude_steady"]
+
+
+def test_sweep_returns_the_locked_ball_the_cli_prints(tmp_path):
+    s = absorber.sweep("paper", [4.0, 4.13], duration=24.0)
+    cli("sweep", "--freqs", "4,4.13", "--duration", "24", "--out", str(tmp_path), "--no-plots")
+    with open(tmp_path / "sweep.csv") as f:
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    # The CSV's locked column, to its printed digits (`{:.6e}`).
+    assert [r["locked_tip_amplitude"] for r in rows] == [f"{x:.6e}".replace("e-0", "e-") for x in s["locked_tip_amplitude"]]
+    # Independent: the scene run with the ball locked, over the same window (t >= 12 s).
+    for f, locked in zip([4.0, 4.13], s["locked_tip_amplitude"]):
+        r = absorber.run("paper", kind="locked", frequency=f, duration=24.0)
+        assert locked == r["summary"]["tip_amplitude_steady"]
+    # The passive absorber at 4.13 Hz: about twice the free ball's amplitude (32.7 vs 16.5 mm).
+    assert s["locked_tip_amplitude"][1] > 1.5 * s["tip_amplitude"][1]
+    # Without a free ball there is nothing to compare with: NaN, not the scene itself.
+    t = absorber.sweep("paper", [4.13], duration=24.0, kind="locked")
+    assert np.isnan(t["locked_tip_amplitude"]).all() and np.isnan(t["ball_max_deg"]).all()
+
+
+def test_sweep_keys_and_doc_are_the_cli_sweep_columns(tmp_path):
+    cli("sweep", "--freqs", "4.13", "--last", "2", "--duration", "6", "--out", str(tmp_path), "--no-plots")
+    with open(tmp_path / "sweep.csv") as f:
+        header = next(csv.reader(line for line in f if not line.startswith("#")))
+    assert list(absorber.SWEEP_COLUMNS) == header
+    numbers = [c for c in header if c not in ("status", "error")]
+    s = absorber.sweep("paper", [4.13], last=2.0, duration=6.0)
+    assert sorted(s) == sorted(numbers + ["errors"])
+    e = absorber.sweep("paper", [4.13], last=2.0, duration=6.0, ensemble=2)
+    assert sorted(e) == sorted(numbers + ["errors", "spread"])
+    missing = [c for c in numbers if f"``{c}``" not in absorber.sweep.__doc__]
+    assert missing == [], missing
+
+
+def test_an_ensemble_prints_the_transient_note_once(capfd):
+    # 4 s: the default 20 s transient falls back to the run's second half, with one note.
+    note = "the default transient (20 s) would leave less than half of the run"
+    absorber.run("paper", duration=4.0, ensemble=3)
+    assert capfd.readouterr().err.count(note) == 1
+    absorber.sweep("paper", [4.13], duration=4.0, ensemble=3)
+    assert capfd.readouterr().err.count(note) == 1
+
+
+def test_a_locked_ball_has_no_angle_of_its_own():
+    r = absorber.run("paper", kind="locked", duration=4.0)
+    s = r["summary"]
+    assert s["ball"] == "locked" and s["ball_angle_max_deg"] is None
+    for c in ("ball_angle", "ball_rel_angle", "ball_rate", "ball_spin"):
+        assert np.isnan(r[c]).all(), c
+    # It turns with the tip mass, which tip_angle gives (the static slope: about 4 degrees).
+    assert 1.0 < abs(np.degrees(r["tip_angle"][0])) < 10.0
+    assert absorber.run("paper", duration=4.0)["summary"]["ball"] == "free"

@@ -6,7 +6,7 @@ use crate::ensemble::Ensemble;
 use crate::excitation::Excitation;
 use crate::figures::{run_plots, PlotData};
 use crate::output::{command_line, with_output, OutputDir, Status};
-use crate::run::{scene_excitation, simulate_with, RunStats, CSV_HEADER};
+use crate::run::{scene_excitation, secs, simulate_with, RunStats, CSV_HEADER};
 use crate::scene::{Kind, Scene};
 use anyhow::{anyhow, bail, Result};
 use indicatif::ProgressBar;
@@ -67,13 +67,6 @@ pub(crate) fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
     check(t, "outputs.transient")
 }
 
-/// A time in seconds as a reader writes it: to the microsecond, trailing zeros dropped
-/// (`9.969`, not the sum's `9.969000000000001`).
-fn secs(t: f64) -> String {
-    let s = format!("{t:.6}");
-    s.trim_end_matches('0').trim_end_matches('.').to_string()
-}
-
 /// Fewest steps a steady-state window may hold.
 pub const MIN_STEADY_STEPS: usize = 10;
 
@@ -118,7 +111,8 @@ fn steady_impacts(s: &Value) -> String {
 
 /// The keys of a run's summary that are settings shared by the members of an ensemble, not
 /// statistics.
-pub const SHARED_KEYS: [&str; 5] = [
+pub const SHARED_KEYS: [&str; 6] = [
+    "ball",
     "duration",
     "steady_from",
     "energy_window",
@@ -140,13 +134,17 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
             num(s, "steady_from"),
             stat(s, "tip_amplitude_steady", 1e3, 3)
         ),
-        format!(
-            "ball angle θ               max {}°; steady {}°; {} stop impacts in the run, {}",
-            stat(s, "ball_angle_max_deg", 1.0, 1),
-            stat(s, "ball_angle_steady_deg", 1.0, 1),
-            count(s, "impacts"),
-            steady_impacts(s)
-        ),
+        match s.get("ball").and_then(Value::as_str) {
+            Some("locked") => "ball                       locked in the housing: it turns with the tip mass (no angle, stop impacts or flight of its own)".to_string(),
+            Some("none") => "ball                       none in this scene".to_string(),
+            _ => format!(
+                "ball angle θ               max {}°; steady {}°; {} stop impacts in the run, {}",
+                stat(s, "ball_angle_max_deg", 1.0, 1),
+                stat(s, "ball_angle_steady_deg", 1.0, 1),
+                count(s, "impacts"),
+                steady_impacts(s)
+            ),
+        },
         format!(
             "mean energy [mJ]           beam {} (first {w:.1} s) → {} (last {w:.1} s); ball {} → {}",
             stat(s, "beam_energy_first", 1e3, 3),
@@ -253,7 +251,22 @@ fn stream_with(
             done = k;
         },
     )?;
-    Ok(stats.json())
+    let mut summary = stats.json();
+    summary["ball"] = ball_state(s.file.kind).into();
+    Ok(summary)
+}
+
+/// What the summary's `ball` says: `free` (the ball's angle and stop impacts are figures of
+/// its own), `locked` (held in the housing: it turns with the tip mass and has no angle, stop
+/// impact or flight of its own) or `none`.
+pub fn ball_state(kind: Kind) -> &'static str {
+    if kind.free_ball() {
+        "free"
+    } else if kind.has_ball() {
+        "locked"
+    } else {
+        "none"
+    }
 }
 
 /// The summaries of members `1..K` of an ensemble (member 0, the scene itself, is run by the
@@ -441,6 +454,17 @@ pub fn run_in_memory(
     every: Option<usize>,
 ) -> Result<(Vec<crate::run::Row>, Value)> {
     let (exc, from, every) = plan(s, transient, every)?;
+    rows_in_memory(s, &exc, from, every)
+}
+
+/// The rows of `run_in_memory` for a planned run ([`plan`]: checked once, its notes printed
+/// once).
+fn rows_in_memory(
+    s: &Scene,
+    exc: &Excitation,
+    from: f64,
+    every: usize,
+) -> Result<(Vec<crate::run::Row>, Value)> {
     let mut rows = Vec::new();
     rows.try_reserve(s.steps() / every + 1).map_err(|_| {
         anyhow::anyhow!(
@@ -449,7 +473,7 @@ pub fn run_in_memory(
         )
     })?;
     let mut k = 0u64;
-    let sum = stream(s, &exc, from, "run", |r| {
+    let sum = stream(s, exc, from, "run", |r| {
         if k.is_multiple_of(every as u64) {
             rows.push(*r);
         }
@@ -474,8 +498,8 @@ pub fn run_ensemble_in_memory(
     e: Ensemble,
 ) -> Result<(Vec<crate::run::Row>, Value)> {
     crate::ensemble::check_scene(s, e)?;
-    let (rows, first) = run_in_memory(s, transient, every)?;
-    let (exc, from, _) = plan(s, transient, every)?;
+    let (exc, from, every) = plan(s, transient, every)?;
+    let (rows, first) = rows_in_memory(s, &exc, from, every)?;
     let pb = ProgressBar::hidden();
     let others = pool(None, e.k)?.install(|| other_members(s, &exc, from, e, &pb))?;
     Ok((rows, ensemble_summary(first, others)))

@@ -51,35 +51,73 @@ fn check(s: &Scene, freqs: Option<&[f64]>, from: f64) -> Result<Vec<f64>> {
     Ok(freqs)
 }
 
+/// The scene with its ball locked (the passive absorber `sweep` compares with), for a scene
+/// whose ball is free; `None` otherwise.
+pub fn locked_scene(s: &Scene) -> Option<Scene> {
+    s.file.kind.free_ball().then(|| {
+        let mut l = s.clone();
+        l.file.kind = crate::scene::Kind::Locked;
+        l
+    })
+}
+
+/// The locked ball's points at `freqs` (none without a free ball), on the current pool.
+fn locked_points(
+    locked: Option<&Scene>,
+    freqs: &[f64],
+    from: f64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<SweepPoint>> {
+    match locked {
+        Some(l) => sweep(l, freqs, from, progress),
+        None => Ok(Vec::new()),
+    }
+}
+
 /// `sweep` in memory (the Python package's `sweep`): the same checks and the same parallel runs
-/// on `jobs` threads (default and at most: the cores and the frequencies), one point per frequency (failed points carry their
-/// error).
+/// on `jobs` threads (default and at most: the cores and the frequencies), one point per
+/// frequency (failed points carry their error), and the locked ball's points as the command
+/// prints them (empty without a free ball).
 pub fn sweep_in_memory(
     s: &Scene,
     freqs: Option<&[f64]>,
     last: Option<f64>,
     jobs: Option<usize>,
-) -> Result<Vec<SweepPoint>> {
+) -> Result<(Vec<SweepPoint>, Vec<SweepPoint>)> {
     let from = window(s, last)?;
     let freqs = check(s, freqs, from)?;
     let pool = pool(jobs, freqs.len())?;
-    pool.install(|| sweep(s, &freqs, from, &|_| {}))
+    let locked = locked_scene(s);
+    pool.install(|| {
+        Ok((
+            sweep(s, &freqs, from, &|_| {})?,
+            locked_points(locked.as_ref(), &freqs, from, &|_| {})?,
+        ))
+    })
 }
 
 /// An ensemble's sweep in memory (the Python package's `sweep(..., ensemble=K)`): per frequency
-/// the aggregated point ([`crate::sweep::aggregate_point`]).
+/// the aggregated point ([`crate::sweep::aggregate_point`]), and the locked ball's points (one
+/// run per frequency: a locked ball has no initial angle to perturb; empty without a free
+/// ball).
 pub fn sweep_ensemble_in_memory(
     s: &Scene,
     freqs: Option<&[f64]>,
     last: Option<f64>,
     jobs: Option<usize>,
     e: Ensemble,
-) -> Result<Vec<Value>> {
+) -> Result<(Vec<Value>, Vec<SweepPoint>)> {
     let from = window(s, last)?;
     let freqs = check(s, freqs, from)?;
     let pool = pool(jobs, freqs.len() * e.k)?;
-    let members = pool.install(|| sweep_members(s, &freqs, from, e, &|_| {}))?;
-    Ok(members.iter().map(|m| aggregate_point(m)).collect())
+    let l = locked_scene(s);
+    let (members, locked) = pool.install(|| -> Result<_> {
+        Ok((
+            sweep_members(s, &freqs, from, e, &|_| {})?,
+            locked_points(l.as_ref(), &freqs, from, &|_| {})?,
+        ))
+    })?;
+    Ok((members.iter().map(|m| aggregate_point(m)).collect(), locked))
 }
 
 pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
@@ -98,12 +136,9 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         .unwrap_or_else(|| s.file.outputs.directory.clone());
     let out = OutputDir::open(&dir, Some("sweep"), &command_line())?;
     let t0 = Instant::now();
-    // The plot compares with the ball locked (the paper's passive case), run alongside.
-    let locked_scene = (s.file.kind.free_ball() && !a.no_plots).then(|| {
-        let mut l = s.clone();
-        l.file.kind = crate::scene::Kind::Locked;
-        l
-    });
+    // The table, CSV, JSON and plot compare with the ball locked (the paper's passive case),
+    // run alongside.
+    let locked_scene = locked_scene(&s);
     let runs = freqs.len() * (1 + usize::from(locked_scene.is_some()));
     let ((points, locked, csv_path, png), _files) = with_output(out, |out| {
         let pb = progress_bar(
@@ -111,12 +146,10 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
             &format!("sweep ({} threads)", pool.current_num_threads()),
         );
         let points = pool.install(|| sweep(&s, &freqs, from, &|n| pb.inc(n)))?;
-        let locked = match &locked_scene {
-            Some(l) => pool.install(|| sweep(l, &freqs, from, &|n| pb.inc(n)))?,
-            None => Vec::new(),
-        };
+        let locked =
+            pool.install(|| locked_points(locked_scene.as_ref(), &freqs, from, &|n| pb.inc(n)))?;
         pb.finish_and_clear();
-        let csv_path = out.write("sweep.csv", &crate::sweep::csv(&points, from))?;
+        let csv_path = out.write("sweep.csv", &crate::sweep::csv(&points, &locked, from))?;
         let png = if a.no_plots {
             None
         } else {
@@ -148,11 +181,7 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         };
         println!("  f [Hz]   tip Y [mm]   ball max|θ| [deg]   ball θ half p-p [deg]   impacts   flight [%]{locked_head}");
         for (i, p) in points.iter().enumerate() {
-            let locked_y = match locked.get(i) {
-                Some(l) if l.error.is_none() => format!("   {:19.4}", l.tip_amplitude * 1e3),
-                Some(_) => format!("   {:>19}", "FAILED"),
-                None => String::new(),
-            };
+            let locked_y = locked_cell(locked.get(i));
             match &p.error {
                 None => println!(
                     "  {:6.3}   {:10.4}   {:17.2}   {:21.2}   {:7}   {:10.1}{locked_y}",
@@ -170,7 +199,11 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         if let Some(p) = &png {
             println!("wrote {}", p.display());
         }
-        println!("wall time {wall:.2} s ({} runs)", points.len());
+        println!(
+            "wall time {wall:.2} s ({} runs, {} with the ball locked)",
+            points.len() + locked.len(),
+            locked.len()
+        );
     }
     if !failed.is_empty() {
         return Err(PointsFailed(format!(
@@ -182,6 +215,15 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// The table's locked-ball cell: its tip amplitude in mm, FAILED, or nothing (not run).
+fn locked_cell(l: Option<&SweepPoint>) -> String {
+    match l {
+        Some(l) if l.error.is_none() => format!("   {:19.4}", l.tip_amplitude * 1e3),
+        Some(_) => format!("   {:>19}", "FAILED"),
+        None => String::new(),
+    }
 }
 
 /// `sweep --ensemble K` (K > 1): every member at every frequency; the table and the JSON give
@@ -196,9 +238,10 @@ fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
         .unwrap_or_else(|| s.file.outputs.directory.clone());
     let out = OutputDir::open(&dir, Some("sweep"), &command_line())?;
     let t0 = Instant::now();
-    let ((points, csv_path, png), _files) = with_output(out, |out| {
+    let l = locked_scene(s);
+    let ((points, locked, csv_path, png), _files) = with_output(out, |out| {
         let pb = progress_bar(
-            (ens.k * freqs.len() * s.steps()) as u64,
+            ((ens.k + usize::from(l.is_some())) * freqs.len() * s.steps()) as u64,
             &format!(
                 "sweep, ensemble of {} ({} threads)",
                 ens.k,
@@ -206,39 +249,51 @@ fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
             ),
         );
         let members = pool.install(|| sweep_members(s, &freqs, from, ens, &|n| pb.inc(n)))?;
+        let locked = pool.install(|| locked_points(l.as_ref(), &freqs, from, &|n| pb.inc(n)))?;
         pb.finish_and_clear();
-        let csv_path = out.write("sweep.csv", &crate::sweep::csv_members(&members, ens, from))?;
+        let csv_path = out.write(
+            "sweep.csv",
+            &crate::sweep::csv_members(&members, &locked, ens, from),
+        )?;
         let points: Vec<Value> = members.iter().map(|m| aggregate_point(m)).collect();
         let png = if a.no_plots {
             None
         } else {
-            Some(out.write_with("sweep.png", |p| plot_ensemble(p, s, &points, from, ens))?)
+            Some(out.write_with("sweep.png", |p| {
+                plot_ensemble(p, s, &points, &locked, from, ens)
+            })?)
         };
         let failed = points.iter().filter(|p| !p["error"].is_null()).count();
         let status = Status::of_points(failed);
         let extra = json!({ "points": points.len(), "failed": failed, "ensemble": ens.k });
-        Ok(((points, csv_path, png), status, extra))
+        Ok(((points, locked, csv_path, png), status, extra))
     })?;
     let wall = t0.elapsed().as_secs_f64();
     let failed = points.iter().filter(|p| !p["error"].is_null()).count();
     if a.json {
         println!(
             "{}",
-            json!({ "scene": s.file.name, "duration": s.file.duration, "last": s.steps() as f64 * s.file.integrator.step - from, "steady_from": from, "steady": crate::run::steady_label(from), "ensemble": ens.json(), "points": points, "failed": failed, "csv": csv_path, "plot": png, "wall_time": wall })
+            json!({ "scene": s.file.name, "duration": s.file.duration, "last": s.steps() as f64 * s.file.integrator.step - from, "steady_from": from, "steady": crate::run::steady_label(from), "ensemble": ens.json(), "points": points, "locked": locked, "failed": failed, "csv": csv_path, "plot": png, "wall_time": wall })
         );
     } else {
         println!("{}", describe(s));
         println!("{}", super::run::ensemble_line(ens));
-        println!("  f [Hz]   tip Y [mm]                    ball max|θ| [deg]        ball θ half p-p [deg]    impacts");
-        for p in &points {
+        let locked_head = if locked.is_empty() {
+            ""
+        } else {
+            "   locked: tip Y [mm]"
+        };
+        println!("  f [Hz]   tip Y [mm]                    ball max|θ| [deg]        ball θ half p-p [deg]    impacts{locked_head}");
+        for (i, p) in points.iter().enumerate() {
             let f = crate::ensemble::value(&p["frequency"]);
             match p["error"].as_str() {
                 None => println!(
-                    "  {f:6.3}   {:28}  {:23}  {:23}  {}",
+                    "  {f:6.3}   {:28}  {:23}  {:23}  {:7}{}",
                     crate::ensemble::text(&p["tip_amplitude"], 1e3, 4),
                     crate::ensemble::text(&p["ball_max_deg"], 1.0, 2),
                     crate::ensemble::text(&p["ball_amplitude_deg"], 1.0, 2),
                     crate::ensemble::count_text(&p["impacts"]),
+                    locked_cell(locked.get(i)),
                 ),
                 Some(e) => println!("  {f:6.3}   FAILED: {e}"),
             }
@@ -247,7 +302,11 @@ fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
         if let Some(p) = &png {
             println!("wrote {}", p.display());
         }
-        println!("wall time {wall:.2} s ({} runs)", points.len() * ens.k);
+        println!(
+            "wall time {wall:.2} s ({} runs, {} with the ball locked)",
+            points.len() * ens.k + locked.len(),
+            locked.len()
+        );
     }
     if failed > 0 {
         return Err(PointsFailed(format!(
@@ -266,6 +325,7 @@ fn plot_ensemble(
     path: &std::path::Path,
     s: &Scene,
     points: &[Value],
+    locked: &[SweepPoint],
     from: f64,
     ens: Ensemble,
 ) -> Result<()> {
@@ -306,7 +366,11 @@ fn plot_ensemble(
                 "Beam tip",
                 "excitation frequency [Hz]",
                 "Y (half peak-to-peak) [mm]",
-                band("tip_amplitude", "Y", 0, 1e3),
+                {
+                    let mut v = band("tip_amplitude", "Y", 0, 1e3);
+                    v.extend(locked_series(locked));
+                    v
+                },
             )
             .with_failed(failed.clone()),
             Panel::new("Ball", "excitation frequency [Hz]", "θ [deg]", {
@@ -320,6 +384,22 @@ fn plot_ensemble(
         1,
         (1100, 900),
     )
+}
+
+/// The locked ball's tip amplitude as the plots draw it (dashed grey; none when not run).
+fn locked_series(locked: &[SweepPoint]) -> Option<Series> {
+    (!locked.is_empty()).then(|| {
+        Series::marked(
+            "ball locked (passive)",
+            locked
+                .iter()
+                .filter(|p| !p.failed())
+                .map(|p| (p.frequency, 1e3 * p.tip_amplitude))
+                .collect(),
+        )
+        .dashed()
+        .colored(crate::plot::GREY)
+    })
 }
 
 fn plot(
@@ -336,20 +416,7 @@ fn plot(
             .map(|p| (p.frequency, 1e3 * p.tip_amplitude))
             .collect(),
     )];
-    if !locked.is_empty() {
-        tip.push(
-            Series::marked(
-                "ball locked (passive)",
-                locked
-                    .iter()
-                    .filter(|p| !p.failed())
-                    .map(|p| (p.frequency, 1e3 * p.tip_amplitude))
-                    .collect(),
-            )
-            .dashed()
-            .colored(crate::plot::GREY),
-        );
-    }
+    tip.extend(locked_series(locked));
     let failed: Vec<f64> = points
         .iter()
         .filter(|p| p.failed())
