@@ -1,13 +1,18 @@
 //! Arbitrary bytes → the C API with arbitrary arguments: every field of `AbsorberParams`
 //! (NaN, infinities, out-of-range enums and flags included; half the inputs perturb the
 //! defaults, half take raw bytes), a variant (unknown ones too), a monitor configuration, then
-//! a sequence of calls (step, restart, outputs, energies, root stress, state with any capacity,
-//! monitor record/read with an arbitrary report, status names of any integer). At most
-//! `MAX_STEPS` of the calls step the model: this target is for the API's surface (parameters,
-//! init with its static solve, every function's arguments); long runs of steps are the `step`
-//! target's. Checks: no panic (the library is `panic = abort` in C; here a panic fails the
-//! run), every status is one of the header's, an `OK` from `absorber_init` gives a handle, a
-//! failed step leaves the state bit for bit, a finite `OK` output follows finite inputs.
+//! a sequence of calls (bursts of steps, restart, outputs, energies, root stress, state with any
+//! capacity, monitor record/read with an arbitrary report, status names of any integer).
+//! Half the inputs run under the firmware's work cap (`ABSORBER_WORK_DEADLINE`, as the
+//! firmware does: every step's work bounded); these step the model in bursts of up to 2,041
+//! steps of a sine plus a random walk of base acceleration, up to `MAX_STEPS_CAPPED` an input,
+//! so that a run puts 10⁷ model steps through `absorber_step_*`. The others (any cap, up to the
+//! 50,000-unit "unlimited" one, ~ms a violent step) take at most `MAX_STEPS` steps.
+//! Checks: no panic (the library is `panic = abort` in C; here a panic fails the run), every
+//! status is one of the header's, an `OK` from `absorber_init` gives a handle, a failed step
+//! leaves the state bit for bit, an accepted step's state is finite, energies of a non-finite
+//! base are refused. Inputs, API calls and model steps are printed every 10⁶ model steps and
+//! when the process exits.
 #![no_main]
 use absorber_ffi::*;
 use libfuzzer_sys::fuzz_target;
@@ -58,7 +63,9 @@ impl Bytes<'_> {
     }
 }
 
+/// A C API call's status checked (and the call counted).
 fn status_ok(s: AbsorberStatus) -> AbsorberStatus {
+    CALLS.fetch_add(1, Relaxed);
     let raw = s as i32;
     assert!((0..=14).contains(&raw), "status {raw}");
     // SAFETY: a static NUL-terminated string.
@@ -72,26 +79,63 @@ struct Storage([u8; ABSORBER_MODEL_SIZE_FREE_N6_F32]);
 #[repr(C, align(16))]
 struct MonitorStorage([u8; ABSORBER_MONITOR_SIZE_F64]);
 
-/// Model steps per input: the C wrapper's step (status, report, state kept on failure) on
-/// whatever parameters the input built. A step costs up to the model's work cap (50,000 units,
-/// milliseconds, on a violent input without `max_work`); long step sequences are the `step`
-/// target's (10⁷ model steps). Later step calls of an input are skipped.
+/// Model steps of an input whose cap the fuzzer chose (any `max_work` up to the 50,000-unit
+/// "unlimited" one: a violent step costs milliseconds). Later step calls are skipped.
 const MAX_STEPS: u32 = 4;
+/// Model steps of an input under the firmware's cap (`ABSORBER_WORK_DEADLINE` work units a step
+/// at most, tens of microseconds).
+const MAX_STEPS_CAPPED: u32 = 4_000;
 
-/// Input calls made over the whole run (for the report).
-static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+/// Inputs run, C API calls made and model steps taken (`absorber_step_*` calls) over the run.
+static INPUTS: AtomicU64 = AtomicU64::new(0);
+static CALLS: AtomicU64 = AtomicU64::new(0);
+static STEPS: AtomicU64 = AtomicU64::new(0);
+/// Of the model steps, those the model took (status `OK`; the others were refused, state kept).
+static STEPS_OK: AtomicU64 = AtomicU64::new(0);
+
+extern "C" fn print_counts() {
+    eprintln!(
+        "fuzz ffi: {} inputs, {} API calls, {} model steps ({} taken, the others refused)",
+        INPUTS.load(Relaxed),
+        CALLS.load(Relaxed),
+        STEPS.load(Relaxed),
+        STEPS_OK.load(Relaxed)
+    );
+}
+
+extern "C" {
+    /// The C library's exit hook (libFuzzer ends a run with `exit`).
+    fn atexit(f: extern "C" fn()) -> i32;
+}
+static AT_EXIT: std::sync::Once = std::sync::Once::new();
+
+/// One model step counted; progress every 10⁶.
+fn step_counted() {
+    let n = STEPS.fetch_add(1, Relaxed) + 1;
+    if n % 1_000_000 == 0 {
+        print_counts();
+    }
+}
 
 fuzz_target!(|bytes: &[u8]| {
+    // SAFETY: registers a plain function with the C library, once.
+    AT_EXIT.call_once(|| unsafe {
+        atexit(print_counts);
+    });
+    INPUTS.fetch_add(1, Relaxed);
     let mut b = Bytes(bytes);
     let mut p = std::mem::MaybeUninit::<AbsorberParams>::uninit();
     // SAFETY: valid for a write.
+    CALLS.fetch_add(1, Relaxed);
     assert_eq!(
         unsafe { absorber_params_default(p.as_mut_ptr()) },
         AbsorberStatus::Ok
     );
     // SAFETY: written just above.
     let mut p = unsafe { p.assume_init() };
-    if b.u8() % 2 == 1 {
+    let head = b.u8();
+    if head % 2 == 1 {
         p.beam.length = b.param(p.beam.length);
         p.beam.mass = b.param(p.beam.mass);
         p.beam.area = b.param(p.beam.area);
@@ -132,6 +176,12 @@ fuzz_target!(|bytes: &[u8]| {
             p.size = b.u32();
         }
     }
+    // The firmware's cap on half the inputs: these may step the model for long.
+    let capped = head & 2 != 0;
+    if capped {
+        p.max_work = ABSORBER_WORK_DEADLINE;
+    }
+    let max_steps = if capped { MAX_STEPS_CAPPED } else { MAX_STEPS };
     let known = ABSORBER_VARIANT_FREE_N3_F32 + b.u8() as u32 % 5;
     let variant = b.enumeration(known);
     let is_f64 = variant == ABSORBER_VARIANT_FREE_N3_F64;
@@ -204,11 +254,17 @@ fuzz_target!(|bytes: &[u8]| {
         // SAFETY (every call below): the handles are live, outputs valid for writes.
         unsafe {
             match op % 9 {
-                0..=2 if steps < MAX_STEPS => {
-                    steps += 1;
-                    let mut before = [0f64; 3 * ABSORBER_MAX_DOFS];
-                    let mut after = [0f64; 3 * ABSORBER_MAX_DOFS];
+                0..=2 if steps < max_steps => {
+                    // A burst of 1 to 2,041 steps (`MAX_STEPS` in all on an uncapped input):
+                    // a sine of amplitude `x` plus a random walk, as long as the steps go.
+                    let n = (1 + b.u8() as u32 * 8).min(max_steps - steps);
+                    let freq = 0.25 + b.u8() as f64 / 8.0;
+                    let walk_step = x * b.u8() as f64 / 2048.0;
+                    let mut seed = b.u32() as u64 | 1;
+                    let mut walk = 0.0;
+                    let dt = p.integrator.step;
                     let snap = |m: *mut AbsorberModel, buf: &mut [f64]| {
+                        CALLS.fetch_add(1, Relaxed);
                         let mut info = AbsorberStateInfoF64::default();
                         let mut q32 = [0f32; 3 * ABSORBER_MAX_DOFS];
                         let (q, rest) = buf.split_at_mut(ABSORBER_MAX_DOFS);
@@ -239,27 +295,46 @@ fuzz_target!(|bytes: &[u8]| {
                             }
                         }
                     };
-                    snap(model, &mut before);
-                    let mut report = AbsorberReportF64::default();
-                    let mut report32 = AbsorberReportF32::default();
-                    let s = if is_f64 {
-                        status_ok(absorber_step_f64(model, x, &mut report))
-                    } else {
-                        status_ok(absorber_step_f32(model, x as f32, &mut report32))
-                    };
+                    let mut after = [0f64; 3 * ABSORBER_MAX_DOFS];
                     snap(model, &mut after);
-                    if s == AbsorberStatus::Ok {
-                        assert!(report.outcome <= 2 && report32.outcome <= 2);
-                    } else {
-                        let bits = |v: &[f64]| v.iter().map(|z| z.to_bits()).collect::<Vec<_>>();
-                        assert_eq!(
-                            bits(&before),
-                            bits(&after),
-                            "failed step {s:?} changed the state"
-                        );
+                    for k in 0..n {
+                        steps += 1;
+                        step_counted();
+                        // xorshift64: the walk's increments, uniform in ±`walk_step`.
+                        seed ^= seed << 13;
+                        seed ^= seed >> 7;
+                        seed ^= seed << 17;
+                        walk += walk_step * ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5);
+                        let t = (k + 1) as f64 * dt;
+                        let base = x * (std::f64::consts::TAU * freq * t).sin() + walk;
+                        let before = after;
+                        let mut report = AbsorberReportF64::default();
+                        let mut report32 = AbsorberReportF32::default();
+                        let s = if is_f64 {
+                            status_ok(absorber_step_f64(model, base, &mut report))
+                        } else {
+                            status_ok(absorber_step_f32(model, base as f32, &mut report32))
+                        };
+                        snap(model, &mut after);
+                        if s == AbsorberStatus::Ok {
+                            STEPS_OK.fetch_add(1, Relaxed);
+                            assert!(report.outcome <= 2 && report32.outcome <= 2);
+                            assert!(
+                                after.iter().all(|z| z.is_finite()),
+                                "accepted step with a non-finite state"
+                            );
+                        } else {
+                            let bits =
+                                |v: &[f64]| v.iter().map(|z| z.to_bits()).collect::<Vec<_>>();
+                            assert_eq!(
+                                bits(&before),
+                                bits(&after),
+                                "failed step {s:?} changed the state"
+                            );
+                        }
                     }
                 }
-                // Past the input's steps (`MAX_STEPS`).
+                // Past the input's steps (`max_steps`).
                 0..=2 => {}
                 3 => {
                     if is_f64 {
@@ -373,14 +448,11 @@ fuzz_target!(|bytes: &[u8]| {
                 }
                 _ => {
                     let raw = b.u32() as i32;
+                    CALLS.fetch_add(1, Relaxed);
                     let name = CStr::from_ptr(absorber_status_name(raw));
                     assert!(!name.to_bytes().is_empty());
                 }
             }
         }
-    }
-    let total = CALLS.fetch_add(calls, std::sync::atomic::Ordering::Relaxed) + calls;
-    if total / 1_000_000 != (total - calls) / 1_000_000 {
-        eprintln!("fuzz ffi: {total} API calls");
     }
 });

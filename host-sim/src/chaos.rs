@@ -183,6 +183,27 @@ pub fn run(a: &ChaosArgs) -> Result<()> {
             anyhow::bail!("invalid value for `--steps`: {h} (must be finite and positive)");
         }
     }
+    for &f in &a.freqs {
+        if !f.is_finite() || f <= 0.0 {
+            anyhow::bail!("invalid value for `--freqs`: {f} (must be finite and positive) [Hz]");
+        }
+    }
+    if !(a.duration.is_finite() && a.duration > 0.0) {
+        anyhow::bail!(
+            "invalid value for `--duration`: {} (must be finite and positive) [s]",
+            a.duration
+        );
+    }
+    if !(a.transient.is_finite() && (0.0..a.duration).contains(&a.transient)) {
+        anyhow::bail!(
+            "invalid value for `--transient`: {} (allowed: 0 ≤ transient < `--duration` = {}) [s]",
+            a.transient,
+            a.duration
+        );
+    }
+    if a.jobs == Some(0) {
+        anyhow::bail!("invalid value for `--jobs`: 0 (must be at least 1)");
+    }
     // Every scene is built (and checked) before any run.
     let mut jobs = Vec::new();
     for &f in &a.freqs {

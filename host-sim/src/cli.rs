@@ -617,3 +617,28 @@ pub fn with_negative_numbers(
 pub fn main(cli: Cli) -> Result<()> {
     crate::commands::dispatch(cli)
 }
+
+/// Reports a command line clap refused and returns its exit code (2; 0 for `--help` and
+/// `--version`). An unknown command is named with the commands there are.
+pub fn usage_error(e: clap::Error) -> std::process::ExitCode {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    if e.kind() == ErrorKind::InvalidSubcommand {
+        let given = match e.get(ContextKind::InvalidSubcommand) {
+            Some(ContextValue::String(s)) => s.clone(),
+            _ => String::new(),
+        };
+        let commands: Vec<String> = <Cli as clap::CommandFactory>::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_string())
+            .collect();
+        eprintln!(
+            "error: unknown command `{given}` (allowed: {}; `host-sim --help` says what each does)",
+            commands.join(", ")
+        );
+        return std::process::ExitCode::from(2);
+    }
+    let code = e.exit_code();
+    // clap prints help and errors itself (with colour on a terminal).
+    let _ = e.print();
+    std::process::ExitCode::from(u8::try_from(code).unwrap_or(2))
+}

@@ -14,7 +14,7 @@ use std::io::{BufRead, BufReader, Read};
 pub fn detect_separator(text: &str) -> u8 {
     let first = text
         .lines()
-        .map(str::trim)
+        .map(|l| l.trim_start_matches('\u{feff}').trim())
         .find(|l| !l.is_empty() && !l.starts_with('#'))
         .unwrap_or_default();
     [b',', b';', b'\t']

@@ -318,7 +318,24 @@ pub fn parse_csv(text: &str, time: &str, column: &str) -> Result<Record> {
 }
 
 fn parse(source: impl std::io::Read, time: &str, column: &str) -> Result<Record> {
-    let mut rows = csvio::Rows::new(source, b',');
+    // The separator from the first content line (comma, semicolon, tab or spaces, as the
+    // excitation record's): the lines up to it are read ahead, the rest streams.
+    use std::io::{BufRead, Read};
+    let mut source = std::io::BufReader::new(source);
+    let mut head = Vec::new();
+    loop {
+        let start = head.len();
+        if source.read_until(b'\n', &mut head)? == 0 {
+            break;
+        }
+        let line = String::from_utf8_lossy(&head[start..]);
+        let line = line.trim_start_matches('\u{feff}').trim();
+        if !line.is_empty() && !line.starts_with('#') {
+            break;
+        }
+    }
+    let separator = csvio::detect_separator(&String::from_utf8_lossy(&head));
+    let mut rows = csvio::Rows::new(head.as_slice().chain(source), separator);
     let Some(header) = rows.next_row()? else {
         bail!("no header row (expected column names, e.g. `t,{column}`)");
     };

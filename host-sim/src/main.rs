@@ -26,8 +26,12 @@ fn main() -> ExitCode {
             .unwrap_or_default();
         eprintln!("error: internal error (panic{at}): {msg}");
     }));
-    let cli =
-        host_sim::cli::Cli::parse_from(host_sim::cli::with_negative_numbers(std::env::args_os()));
+    let cli = match host_sim::cli::Cli::try_parse_from(host_sim::cli::with_negative_numbers(
+        std::env::args_os(),
+    )) {
+        Ok(cli) => cli,
+        Err(e) => return host_sim::cli::usage_error(e),
+    };
     match std::panic::catch_unwind(|| host_sim::cli::main(cli)) {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {

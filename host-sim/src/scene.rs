@@ -1394,8 +1394,10 @@ impl Scene {
         let ei = p.beam.modulus * p.beam.inertia;
         if !ei.is_normal() || ei > 1e12 {
             bail!(
-                "invalid value for `beam.modulus` × `beam.inertia`: E·I = {ei:e} N·m² is not representable \
-                 (allowed: 1e-300 < E·I ≤ 1e12 N·m²)"
+                "invalid value for `beam.modulus` × `beam.inertia`: {} Pa × {} m⁴ = E·I = {ei:e} N·m² \
+                 is not representable (allowed: 1e-300 < E·I ≤ 1e12 N·m²)",
+                num(p.beam.modulus),
+                num(p.beam.inertia)
             );
         }
         self.check_magnitudes(p)?;
@@ -1470,7 +1472,19 @@ impl Scene {
                       mass matrix is singular";
         // Beam: axial stiffness E·a/L against bending stiffness E·I/L³, i.e. a·L² against I.
         let al2 = b.area * b.length * b.length;
-        if far(b.inertia, d.beam.inertia) > far(b.area, d.beam.area) {
+        let far_length = far(b.length, d.beam.length);
+        if far_length > far(b.inertia, d.beam.inertia) && far_length > far(b.area, d.beam.area) {
+            // The length farthest from the paper's: a·L² against I means L against √(I/a).
+            ratio(
+                "beam.length",
+                b.length,
+                "m",
+                "√(`beam.inertia`/`beam.area`) (axial against bending stiffness)",
+                (b.inertia / b.area).sqrt(),
+                (lo2, hi2),
+                why_lin,
+            )?;
+        } else if far(b.inertia, d.beam.inertia) > far(b.area, d.beam.area) {
             ratio(
                 "beam.inertia",
                 b.inertia,
@@ -1696,7 +1710,7 @@ fn finite_positive(x: f64, key: &str) -> Result<()> {
 /// The scene-file key of a core parameter name, and the value written there.
 fn scene_key(field: &str, s: &Scene) -> (String, String) {
     let f = &s.file;
-    let v = |x: f64| format!("{x}");
+    let v = num;
     match field {
         "ball.stop_angle" => ("ball.stop_angle_deg".into(), v(f.ball.stop_angle_deg)),
         "ball.initial_angle" => ("ball.initial_angle_deg".into(), v(f.ball.initial_angle_deg)),
@@ -1735,6 +1749,16 @@ fn scene_key(field: &str, s: &Scene) -> (String, String) {
         "calibration.bending_stiffness" => (field.into(), v(f.calibration.bending_stiffness)),
         "calibration.axial_stiffness" => (field.into(), v(f.calibration.axial_stiffness)),
         "calibration.mass_lumping" => (field.into(), v(f.calibration.mass_lumping)),
+        "arm.root_diameter" | "arm.tip_diameter" | "arm.wall" | "arm.density" => {
+            let a = f.arm.as_ref();
+            let x = a.map(|a| match field {
+                "arm.root_diameter" => a.root_diameter,
+                "arm.tip_diameter" => a.tip_diameter,
+                "arm.wall" => a.wall,
+                _ => a.density,
+            });
+            (field.into(), x.map_or("?".into(), v))
+        }
         other => (other.into(), "?".into()),
     }
 }
@@ -1749,7 +1773,25 @@ pub fn map_core_error(e: absorber_core::Error, scene: &Scene) -> anyhow::Error {
             } else {
                 reason.to_string()
             };
-            anyhow!("invalid value for `{key}`: {value} ({reason})")
+            // The partner a reason compares with, and its value.
+            let partner = match field {
+                "ball.track_radius" => format!("; `ball.radius` = {}", num(scene.file.ball.radius)),
+                "ball.initial_angle" => {
+                    format!(
+                        "; `ball.stop_angle_deg` = {}",
+                        num(scene.file.ball.stop_angle_deg)
+                    )
+                }
+                "arm.wall" => scene.file.arm.as_ref().map_or(String::new(), |a| {
+                    format!(
+                        "; `arm.root_diameter` = {}, `arm.tip_diameter` = {}",
+                        num(a.root_diameter),
+                        num(a.tip_diameter)
+                    )
+                }),
+                _ => String::new(),
+            };
+            anyhow!("invalid value for `{key}`: {value} ({reason}{partner})")
         }
         other => anyhow!(physical_failure(other, scene)),
     }
@@ -1799,6 +1841,33 @@ fn one_line(e: &toml::de::Error, text: &str, path: &str) -> anyhow::Error {
     let at = line.map(|l| format!(" (line {l})")).unwrap_or_default();
     let msg = e.message().trim().replace('\n', " ");
     if path.is_empty() || path == "." {
+        // A syntax error names the line; the key written on it too (`length =` with no value
+        // is reported by the parser as an unquoted string).
+        let key = line.and_then(|l| text.lines().nth(l - 1)).and_then(|l| {
+            let (k, v) = l.split_once('=')?;
+            let k = k.trim();
+            (!k.is_empty() && !k.starts_with('[') && !k.starts_with('#')).then_some((k, v.trim()))
+        });
+        if let Some((k, value)) = key {
+            let section = line
+                .and_then(|l| {
+                    text.lines()
+                        .take(l - 1)
+                        .filter_map(|t| t.trim().strip_prefix('['))
+                        .filter_map(|t| t.split(']').next())
+                        .last()
+                })
+                .map(|t| format!("{}.", t.trim_start_matches('[')))
+                .unwrap_or_default();
+            return if value.is_empty() {
+                anyhow!(
+                    "`{section}{k}`: no value (allowed: a number, a quoted string, true/false, an \
+                     array or a table){at}"
+                )
+            } else {
+                anyhow!("`{section}{k}` = `{value}`: {msg}{at}")
+            };
+        }
         anyhow!("{msg}{at}")
     } else {
         anyhow!("`{path}`: {msg}{at}")

@@ -143,8 +143,8 @@ def modes(scene: SceneLike = "paper", count: int = 4, **overrides: Any) -> np.nd
     Raises:
         AbsorberError: bad scene or option.
     """
-    if count < 0:
-        raise AbsorberError("invalid value for `count`: must not be negative")
+    if count < 1:
+        raise AbsorberError(f"invalid value for `count`: {count} (must be at least 1)")
     return _absorber.modes(_scene(scene), overrides, count)
 
 
@@ -190,7 +190,12 @@ def sweep(
     Raises:
         AbsorberError: bad scene, frequencies or window.
     """
-    f = None if freqs is None else [float(x) for x in np.asarray(freqs, dtype=float).ravel()]
+    try:
+        f = None if freqs is None else [float(x) for x in np.asarray(freqs, dtype=float).ravel()]
+    except (TypeError, ValueError) as e:
+        raise AbsorberError(
+            f"invalid value for `freqs`: {freqs!r} (allowed: a sequence of numbers [Hz]; {e})"
+        ) from None
     result = json.loads(_absorber.sweep(_scene(scene), overrides, f, last, jobs, ensemble, seed))
     points, locked = result["points"], result["locked"]
     columns = [c for c in SWEEP_COLUMNS if c not in ("status", "error", "locked_tip_amplitude")]

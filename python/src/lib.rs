@@ -86,11 +86,22 @@ fn interruptible<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyRes
     })
 }
 
+/// A whole-number argument `key` of at least `min` (a negative one is named, not an
+/// `OverflowError`).
+fn whole(v: i64, key: &str, min: i64) -> PyResult<usize> {
+    if v < min {
+        return Err(error(format!(
+            "invalid value for `{key}`: {v} (must be at least {min})"
+        )));
+    }
+    usize::try_from(v).map_err(|_| error(format!("invalid value for `{key}`: {v} (too large)")))
+}
+
 /// A Python value of a scene dictionary as TOML.
 fn toml_value(v: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<toml::Value> {
     if depth > MAX_SCENE_DEPTH {
         return Err(error(format!(
-            "invalid value for `{}`: the scene dictionary nests deeper than {MAX_SCENE_DEPTH} levels (does it contain itself?)",
+            "invalid value for `{}`: the scene dictionary nests deeper than {MAX_SCENE_DEPTH} levels (allowed: at most {MAX_SCENE_DEPTH}; does it contain itself?)",
             key.split('.').take(MAX_SCENE_DEPTH).collect::<Vec<_>>().join(".")
         )));
     }
@@ -122,7 +133,7 @@ fn toml_value(v: &Bound<'_, PyAny>, key: &str, depth: usize) -> PyResult<toml::V
         ));
     }
     Err(error(format!(
-        "invalid value for `{key}`: a {} cannot go into a scene (use numbers, strings, booleans, lists, dicts)",
+        "invalid value for `{key}`: a `{}` cannot go into a scene (allowed: numbers, strings, booleans, lists, dicts)",
         v.get_type().name()?
     )))
 }
@@ -231,8 +242,8 @@ fn run<'py>(
     scene: &Bound<'py, PyAny>,
     overrides: Option<&Bound<'py, PyDict>>,
     transient: Option<f64>,
-    every: Option<usize>,
-    ensemble: usize,
+    every: Option<i64>,
+    ensemble: i64,
     seed: u64,
 ) -> PyResult<(
     Vec<&'static str>,
@@ -240,6 +251,8 @@ fn run<'py>(
     String,
     Vec<String>,
 )> {
+    let every = every.map(|n| whole(n, "every", 1)).transpose()?;
+    let ensemble = whole(ensemble, "ensemble", 1)?;
     let s = scene_with(scene, overrides)?;
     let w = warnings(&s);
     let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
@@ -286,8 +299,9 @@ fn modes<'py>(
     py: Python<'py>,
     scene: &Bound<'py, PyAny>,
     overrides: Option<&Bound<'py, PyDict>>,
-    count: usize,
+    count: i64,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let count = whole(count, "count", 1)?;
     let s = scene_with(scene, overrides)?;
     let f = interruptible(py, || commands::lowest_frequencies(&s, count))?.map_err(to_py)?;
     Ok(PyArray1::from_vec(py, f))
@@ -306,10 +320,17 @@ fn sweep(
     overrides: Option<&Bound<'_, PyDict>>,
     freqs: Option<Vec<f64>>,
     last: Option<f64>,
-    jobs: Option<usize>,
-    ensemble: usize,
+    jobs: Option<i64>,
+    ensemble: i64,
     seed: u64,
 ) -> PyResult<String> {
+    if freqs.as_ref().is_some_and(Vec::is_empty) {
+        return Err(error(
+            "invalid value for `freqs`: [] (allowed: at least one frequency [Hz])".into(),
+        ));
+    }
+    let jobs = jobs.map(|n| whole(n, "jobs", 1)).transpose()?;
+    let ensemble = whole(ensemble, "ensemble", 1)?;
     let s = scene_with(scene, overrides)?;
     let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
     let text = interruptible(py, || -> anyhow::Result<String> {

@@ -56,3 +56,28 @@ def test_sweep_jobs_are_capped_at_the_points_and_the_cores():
     points = absorber.sweep("paper", [4.0, 4.1], last=0.5, jobs=10**6, duration=1.0)
     assert list(points["frequency"]) == [4.0, 4.1]
     assert time.monotonic() - start < 60
+
+
+def test_bad_arguments_name_the_argument_its_value_and_the_range():
+    # Before: count=0 and freqs=[] returned empty results, every=-1 raised an OverflowError,
+    # freqs=["a"] a bare ValueError naming nothing.
+    cases = [
+        (lambda: absorber.modes("paper", count=0), ["`count`", "0", "at least 1"]),
+        (lambda: absorber.modes("paper", count=-1), ["`count`", "-1", "at least 1"]),
+        (lambda: absorber.run("paper", every=-1, duration=0.2), ["`every`", "-1", "at least 1"]),
+        (lambda: absorber.sweep("paper", freqs=[], duration=0.5), ["`freqs`", "[]", "at least one"]),
+        (lambda: absorber.sweep("paper", freqs=["a"], duration=0.5), ["`freqs`", "'a'", "numbers"]),
+        (
+            lambda: absorber.sweep("paper", freqs=[4.1], jobs=-2, duration=0.5),
+            ["`jobs`", "-2", "at least 1"],
+        ),
+        (
+            lambda: absorber.static({"beam": {"length": object()}}),
+            ["`beam.length`", "`object`", "allowed: numbers"],
+        ),
+    ]
+    for call, words in cases:
+        with pytest.raises(absorber.AbsorberError) as e:
+            call()
+        for w in words:
+            assert w in str(e.value), (w, str(e.value))

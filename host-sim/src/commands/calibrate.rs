@@ -222,7 +222,10 @@ pub fn identify(a: &IdentifyArgs) -> Result<()> {
     let band = match a.band.as_deref() {
         None => None,
         Some([lo, hi]) => Some((*lo, *hi)),
-        Some(_) => bail!("invalid value for `--band`: give two frequencies `lo,hi` [Hz]"),
+        Some(v) => bail!(
+            "invalid value for `--band`: {} (allowed: two frequencies `lo,hi` [Hz], 0 < lo < hi)",
+            v.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
+        ),
     };
     let out = match &a.out {
         Some(p) => Some(OutputDir::for_file(p, "identify")?),

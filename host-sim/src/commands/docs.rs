@@ -5,6 +5,15 @@ use crate::output::PointsFailed;
 use anyhow::{bail, Result};
 
 pub fn stability(a: &crate::stability::StabilityArgs) -> Result<()> {
+    if !(a.drift_duration.is_finite() && a.drift_duration > 0.0) {
+        bail!(
+            "invalid value for `--drift-duration`: {} (must be finite and positive) [s]",
+            a.drift_duration
+        );
+    }
+    if a.jobs == Some(0) {
+        bail!("invalid value for `--jobs`: 0 (must be at least 1)");
+    }
     if a.only.is_some()
         && (a.out == std::path::Path::new("docs/stability.md") || is_the_document(&a.out))
     {
@@ -17,6 +26,9 @@ pub fn stability(a: &crate::stability::StabilityArgs) -> Result<()> {
 }
 
 pub fn accuracy(a: &crate::accuracy::AccuracyArgs) -> Result<()> {
+    if a.repeats == Some(0) {
+        bail!("invalid value for `--repeats`: 0 (must be at least 1)");
+    }
     crate::accuracy::run(a)
 }
 

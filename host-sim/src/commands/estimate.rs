@@ -8,7 +8,7 @@ use crate::estimate::{EstimatorReport, LabReport, Quality, TwinReport};
 use crate::output::{OutputDir, Status};
 use crate::plot::{render, Panel, Series};
 use crate::scene::Scene;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
 
 /// Runs the command.
@@ -31,6 +31,23 @@ fn check_duration(duration: f64, h: f64) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Checks `--tip-force` before anything runs: finite, positive and no more than the arm can
+/// carry, as a scene's sag is checked: a static tip deflection F·L³/(3·E·I) of at most half
+/// the length.
+fn check_tip_force(force: f64, scene: &Scene) -> Result<f64> {
+    let p = scene.params()?;
+    let (l, ei) = (p.beam.length, p.beam.modulus * p.beam.inertia);
+    let most = 0.5 * l * 3.0 * ei / l.powi(3);
+    if !(force.is_finite() && force > 0.0 && force <= most) {
+        bail!(
+            "invalid value for `--tip-force`: {force:e} N (allowed: 0 < force ≤ {most:.4e} N: \
+             under more, the arm's static tip deflection F·L³/(3·E·I) exceeds half its length \
+             {l} m; default 0.05 N)"
+        );
+    }
+    Ok(most)
 }
 
 pub fn run(a: &EstimateArgs) -> Result<()> {
@@ -58,6 +75,7 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
         let duration = a.duration.unwrap_or(scene.file.duration);
         let h = scene.file.integrator.step;
         check_duration(duration, h)?;
+        let most_force = check_tip_force(a.tip_force, &scene)?;
         let mut scene = scene;
         if let Some(f) = a.frequency {
             if !(f.is_finite() && f > 0.0) {
@@ -72,7 +90,15 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             Some(dir) => Some(OutputDir::open(dir, Some("lab"), "estimate --lab")?),
             None => None,
         };
-        let (r, series) = crate::estimate::lab(&scene, duration, a.tip_force, baseline)?;
+        let (r, series) = crate::estimate::lab(&scene, duration, a.tip_force, baseline)
+            .with_context(|| {
+                format!(
+                    "the lab study failed under `--tip-force` {} N (allowed: at most {most_force:.4e} \
+                     N, what the arm carries statically; near resonance the motion is larger: try \
+                     a smaller force, default 0.05 N)",
+                    a.tip_force
+                )
+            })?;
         if let Some(mut dir) = out.take() {
             write_lab_files(&mut dir, &r, &series)?;
             dir.commit(Status::Complete, graded_json(&r, &r.estimators)?)?;
@@ -85,7 +111,10 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
         return Ok(());
     }
     if a.frequency.is_some() {
-        bail!("`--frequency` belongs to `--lab` (the twin's loads come from the scene)");
+        bail!(
+            "invalid option `--frequency` {}: allowed only with `--lab` (the twin's loads come from the scene)",
+            a.frequency.unwrap_or(f64::NAN)
+        );
     }
     if let Some(path) = &a.emit_firmware {
         let text = crate::estimate::firmware::constants(&scene)?;

@@ -80,6 +80,9 @@ pub fn static_cmd(a: &InfoArgs) -> Result<()> {
 }
 
 pub fn modes(a: &ModesArgs) -> Result<()> {
+    if a.count == 0 {
+        anyhow::bail!("invalid value for `--count`: 0 (must be at least 1)");
+    }
     let s = load(&a.scene.scene_args())?;
     let (sim, elements) = structure(&s)?;
     let f = lowest_frequencies(&s, a.count)?;

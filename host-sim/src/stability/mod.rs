@@ -1413,6 +1413,17 @@ pub fn command(args: &StabilityArgs) -> anyhow::Result<()> {
     let mut cases = matrix(length);
     if let Some(only) = &args.only {
         cases.retain(|c| c.group.contains(only.as_str()) || c.name.contains(only.as_str()));
+        if cases.is_empty() {
+            anyhow::bail!(
+                "invalid value for `--only`: `{only}` (no case's group or name contains it; the groups: {})",
+                {
+                    let mut g: Vec<&str> = matrix(length).iter().map(|c| c.group).collect();
+                    g.sort_unstable();
+                    g.dedup();
+                    g.join(", ")
+                }
+            );
+        }
     }
     let jobs = args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism()
