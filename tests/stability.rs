@@ -54,6 +54,7 @@ fn full_and_core_momenta_agree() {
         solver: FullSolver::at_rest(p, SceneKind::FreeBall, 3, 0.0).unwrap(),
         bodies: Bodies::Free,
         params: p,
+        held: None,
     };
     let mut worst = 0.0f64;
     let mut largest = 0.0f64;
@@ -135,6 +136,7 @@ fn garbage_after_good_samples_is_a_clear_error() {
         expect: Expect::Error("not finite"),
         note: "",
         known_issue: None,
+        arm: None,
     };
     let o = run_case(&case);
     assert!(o.passes(&case.expect), "{o:?}");
