@@ -139,6 +139,23 @@ pub fn set_orbit_rate<T: Real, S: Scene, const N: usize, const D: usize>(
     model.set_configuration(s.q, v, s.base_accel)
 }
 
+/// The arm's parameters in precision `T` (each value rounded to nearest).
+pub fn cast_arm<T: absorber_core::Real>(
+    a: &absorber_core::ArmParams<f64>,
+) -> absorber_core::ArmParams<T> {
+    let lit = absorber_core::scalar::lit::<T>;
+    absorber_core::ArmParams {
+        root_diameter: lit(a.root_diameter),
+        tip_diameter: lit(a.tip_diameter),
+        wall: lit(a.wall),
+        density: lit(a.density),
+        point_masses: a.point_masses.map(|m| absorber_core::PointMass {
+            position: lit(m.position),
+            mass: lit(m.mass),
+        }),
+    }
+}
+
 /// The parameters rounded to `f32`.
 pub fn params_f32(p: &Params<f64>) -> Params<f32> {
     let b = &p.ball;

@@ -231,34 +231,18 @@ struct Run {
     category: absorber_core::monitor::DetailCategory,
 }
 
-fn cast_arm<T: Real>(a: &ArmParams<f64>) -> ArmParams<T> {
-    let mut point_masses = [absorber_core::PointMass {
-        position: T::zero(),
-        mass: T::zero(),
-    }; absorber_core::loads::MAX_POINT_MASSES];
-    for (d, s) in point_masses.iter_mut().zip(&a.point_masses) {
-        *d = absorber_core::PointMass {
-            position: lit(s.position),
-            mass: lit(s.mass),
-        };
-    }
-    ArmParams {
-        root_diameter: lit(a.root_diameter),
-        tip_diameter: lit(a.tip_diameter),
-        wall: lit(a.wall),
-        density: lit(a.density),
-        point_masses,
-    }
-}
-
 impl Run {
     fn go<T: Real, S: CoreScene, const N: usize, const D: usize>(
         &self,
         scene: &Scene,
     ) -> Result<RecordResult> {
         let p = absorber_fmu::sim::cast_params::<T>(&self.params);
-        let mut model = Model::<T, Arm<S>, N, D>::arm_at_rest(p, &cast_arm(&self.arm), T::zero())
-            .map_err(|e| crate::scene::map_core_error(e, scene))?;
+        let mut model = Model::<T, Arm<S>, N, D>::arm_at_rest(
+            p,
+            &crate::core_sim::cast_arm(&self.arm),
+            T::zero(),
+        )
+        .map_err(|e| crate::scene::map_core_error(e, scene))?;
         let s = &self.section;
         let section = RootSection::<T> {
             bending_rigidity: lit(s.bending_rigidity),

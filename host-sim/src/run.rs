@@ -490,7 +490,12 @@ pub fn steady_label(from: f64) -> String {
 /// A time in seconds as a reader writes it: to the microsecond, trailing zeros dropped
 /// (`4.999`, not the sum's `4.9990000000000006`).
 pub fn secs(t: f64) -> String {
-    let s = format!("{t:.6}");
+    trimmed(t, 6)
+}
+
+/// `x` with `decimals` decimals, trailing zeros and a trailing point dropped.
+pub fn trimmed(x: f64, decimals: usize) -> String {
+    let s = format!("{x:.decimals$}");
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 

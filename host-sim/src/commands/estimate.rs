@@ -208,8 +208,7 @@ fn figure_text(q: &Quality) -> String {
 
 /// A range bound with the digits it needs (0.5, 2, 0.71, 90, 99).
 fn fmt_bound(x: f64) -> String {
-    let two = format!("{x:.2}");
-    two.trim_end_matches('0').trim_end_matches('.').to_string()
+    crate::run::trimmed(x, 2)
 }
 
 /// The per-estimator table of a study.

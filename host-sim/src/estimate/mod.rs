@@ -316,21 +316,7 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
 
 /// The `f32` arm.
 pub fn arm_f32(a: &ArmParams<f64>) -> ArmParams<f32> {
-    let mut pm = [absorber_core::PointMass {
-        position: 0.0f32,
-        mass: 0.0,
-    }; absorber_core::loads::MAX_POINT_MASSES];
-    for (d, s) in pm.iter_mut().zip(a.point_masses.iter()) {
-        d.position = s.position as f32;
-        d.mass = s.mass as f32;
-    }
-    ArmParams {
-        root_diameter: a.root_diameter as f32,
-        tip_diameter: a.tip_diameter as f32,
-        wall: a.wall as f32,
-        density: a.density as f32,
-        point_masses: pm,
-    }
+    crate::core_sim::cast_arm(a)
 }
 
 /// The `f32` root section.

@@ -24,7 +24,7 @@ use crate::sim::Simulator;
 use crate::wind::{LoadComponent, LoadModel};
 use absorber_core::{
     Arm, ArmParams, BeamOnly, Error, FreeBall, ImpactModel, Loads, LockedBall, Model, NewtonKind,
-    Params, PointMass, Real, Scene, StepReport,
+    Params, Real, Scene, StepReport,
 };
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -562,20 +562,6 @@ fn locked<T: Real + 'static>(n: usize, p: Params<T>, a0: T) -> Result<Box<dyn Pr
     )
 }
 
-fn cast_arm<T: Real>(a: &ArmParams<f64>) -> ArmParams<T> {
-    let lit = absorber_core::scalar::lit::<T>;
-    ArmParams {
-        root_diameter: lit(a.root_diameter),
-        tip_diameter: lit(a.tip_diameter),
-        wall: lit(a.wall),
-        density: lit(a.density),
-        point_masses: a.point_masses.map(|m| PointMass {
-            position: lit(m.position),
-            mass: lit(m.mass),
-        }),
-    }
-}
-
 /// The core model of a bare arm (N = 3, the monitor's model) at rest.
 fn arm_core<T: Real + 'static>(
     n: usize,
@@ -589,7 +575,7 @@ fn arm_core<T: Real + 'static>(
             reason: "arm stability cases: 3",
         });
     }
-    let m = Model::<T, Arm<BeamOnly>, 3, 12>::arm_at_rest(p, &cast_arm(arm), a0)?;
+    let m = Model::<T, Arm<BeamOnly>, 3, 12>::arm_at_rest(p, &crate::core_sim::cast_arm(arm), a0)?;
     Ok(Box::new(CoreProbe(m)))
 }
 
