@@ -27,6 +27,7 @@ use absorber_core::monitor::stress::{MomentEstimate, RootSection};
 use absorber_core::scalar::{lit, to_f64};
 use absorber_core::{Arm, BeamOnly, FreeBall, LockedBall, Model, Params, Real, Scene as CoreScene};
 use anyhow::{anyhow, bail, Result};
+use rand::Rng as _;
 use serde::Serialize;
 
 /// Width of a stress-range bin \[Pa\].
@@ -104,7 +105,7 @@ pub fn bin_of(range: f64) -> usize {
 /// The scene's loads with every buffeting seed replaced by one drawn from `seed` (a record's
 /// turbulence realization).
 fn reseeded(loads: &[LoadComponent], seed: u64) -> Vec<LoadComponent> {
-    let mut rng = crate::wind::Rng::new(seed);
+    let mut rng = crate::wind::seeded(seed);
     loads
         .iter()
         .map(|c| {

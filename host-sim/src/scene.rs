@@ -33,6 +33,8 @@ use absorber_core::{
     NewtonKind, Params, TipParams,
 };
 use anyhow::{anyhow, bail, Context, Result};
+use rand::RngExt;
+use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -613,7 +615,7 @@ impl SensorSpec {
     /// quantized, and at the rail when at or beyond the range.
     pub fn read(&self, x: f64, rng: &mut crate::wind::Rng) -> f64 {
         let range = self.range();
-        let mut y = x + self.bias() + self.noise_sd_raw() * rng.normal();
+        let mut y = x + self.bias() + self.noise_sd_raw() * rng.sample::<f64, _>(StandardNormal);
         let q = self.resolution();
         if q > 0.0 {
             y = (y / q).round() * q;
@@ -840,7 +842,8 @@ impl SensorSection {
     /// (σ = [`SensorSection::noise_sd`], drawn from `rng`), clipped at the range.
     pub fn read(&self, a: f64, rng: &mut crate::wind::Rng) -> f64 {
         let range = self.range();
-        (a + self.bias_mg * 1e-3 * G0 + self.noise_sd() * rng.normal()).clamp(-range, range)
+        (a + self.bias_mg * 1e-3 * G0 + self.noise_sd() * rng.sample::<f64, _>(StandardNormal))
+            .clamp(-range, range)
     }
 
     /// The estimator runs at the sensor rate: the step `h` must be `1 / rate`.

@@ -251,8 +251,8 @@ impl Noise {
     /// `count` components spread evenly (jittered) over `[f_lo, f_hi]` Hz, random phases from
     /// `seed` ([`crate::wind::Rng`]), equal amplitudes giving the RMS `rms` \[m/s²\].
     pub fn new(seed: u64, count: usize, f_lo: f64, f_hi: f64, rms: f64) -> Self {
-        let mut rng = crate::wind::Rng::new(seed);
-        let mut uniform = move || rng.uniform();
+        let mut rng = crate::wind::seeded(seed);
+        let mut uniform = move || rand::RngExt::random::<f64>(&mut rng);
         let amp = rms * (2.0 / count as f64).sqrt();
         let parts = (0..count)
             .map(|i| {
@@ -573,7 +573,7 @@ pub fn calibrated(cfg: Config, reference: usize) -> Result<Config> {
 }
 
 /// Version of the cached files (bump when the solver or the sampling changes).
-const CACHE_VERSION: u32 = 2; // 2: per-solve Newton matrix with the settled-error test, faer LU
+const CACHE_VERSION: u32 = 3; // 3: the noise scenes on ChaCha8 (`rand`); 2: per-solve Newton matrix with the settled-error test, faer LU
 
 /// Full-solver run, cached in `cache` (JSON) under a name made of everything it depends on.
 pub fn cached_full(

@@ -26,7 +26,7 @@
 
 use super::{core, damage_of, mean, rms, stress_error_pct, Damage, EstimatorReport, Truth, N};
 use crate::scene::SensorSpec;
-use crate::wind::Rng;
+use crate::wind::seeded;
 use absorber_core::estimator::{
     Ekf, EkfConfig, HealthConfig, ModalBasis, ReadingUse, Readings, Sensor, SensorKind, SensorSet,
     Verdict,
@@ -36,6 +36,7 @@ use absorber_core::monitor::stress::{root_reaction_moment, RootSection};
 use absorber_core::{Model, Scene as CoreScene};
 use anyhow::{bail, Result};
 use nalgebra::SVector;
+use rand::RngExt;
 
 /// Modes the filter carries.
 pub const MODES: usize = 3;
@@ -123,9 +124,10 @@ pub fn measure(truth: &Truth, specs: &[SensorSpec], h: f64, quiet: usize) -> Res
     for (i, s) in specs.iter().enumerate() {
         let kind = s.kind();
         let e = s.every(h, i)?;
-        // The tip accelerometer keeps the seed's own stream (the twin's before sensor sets);
-        // the others mix their kind in.
-        let mut rng = Rng::new(s.seed() ^ (kind.index() as u64).wrapping_mul(0x9E37_79B9));
+        // Each kind of sensor draws from its own stream of the seed (the tip accelerometer's
+        // is stream 0, the seed's own).
+        let mut rng = seeded(s.seed());
+        rng.set_stream(kind.index() as u64);
         let v: Vec<Option<f64>> = (0..=truth.steps())
             .map(|k| {
                 (k as u64)
@@ -267,11 +269,11 @@ pub fn surrogate(history: &[f64], steps: usize, h: f64, seed: u64) -> Vec<f64> {
         .collect();
     let mut planner = FftPlanner::<f64>::new();
     planner.plan_fft_forward(n).process(&mut buf);
-    let mut rng = Rng::new(seed);
+    let mut rng = seeded(seed);
     // Bins 1 … ⌈n/2⌉ − 1 get a random phase, their mirrors the conjugate; the mean and, for
     // even n, the Nyquist bin stay real.
     for k in 1..n.div_ceil(2) {
-        let phase = Complex::from_polar(1.0, std::f64::consts::TAU * rng.uniform());
+        let phase = Complex::from_polar(1.0, std::f64::consts::TAU * rng.random::<f64>());
         let c = buf[k].norm() * phase;
         buf[k] = c;
         buf[n - k] = c.conj();
