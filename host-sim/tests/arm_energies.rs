@@ -25,7 +25,7 @@ fn mast_arm() -> (absorber_core::Params<f64>, absorber_core::ArmParams<f64>) {
 /// agrees to 1e-9 (two Newton solves, each to its tolerance on a 0.40 m sag). Then 300 steps
 /// (3 s) under a 200 N tip force and a 20 N/m line load, both solvers stepped with the same
 /// loads: kinetic and strain energies agree to 1e-6 of the energy exchanged (the two Newton
-/// solves per step converge to 1e-5 of h² a, the full solver's coordinates carry the clamp).
+/// solves per step each stop at their tolerance; measured: 1e-13).
 #[test]
 fn core_arm_energies_match_the_full_solver() {
     let (p, arm) = mast_arm();
@@ -56,15 +56,6 @@ fn core_arm_energies_match_the_full_solver() {
             Simulator::energies(&full, 0.0, 0.0),
         );
         let scale = (ec.beam_strain - strain0).abs().max(ec.beam_kinetic);
-        eprintln!(
-            "step {k}: kinetic {} vs {}, strain {} vs {}, potential {} vs {}",
-            ec.beam_kinetic,
-            ef.beam_kinetic,
-            ec.beam_strain,
-            ef.beam_strain,
-            ec.beam_potential,
-            ef.beam_potential
-        );
         assert!(
             (ec.beam_kinetic - ef.beam_kinetic).abs() < 1e-6 * scale,
             "step {k}: kinetic {} vs {}",
