@@ -163,14 +163,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     }
 
     /// Vertical momentum relative to the base \[kg·m/s\]: `∫ μ ẏ dx` of the beam (per element
-    /// `−Q_f(g = 1) · u̇`, eq. 17) plus `m_t Ḃ_y + m_b Ḋ_y` of the tip mass and ball. In the
+    /// `−Q_f(g = 1) · u̇`, eq. 17, heads included on an arm) plus `m_t Ḃ_y + m_b Ḋ_y` of the tip mass and ball. In the
     /// frame moving with the base the only energy source is the inertial force −m ÿ_b, whose
     /// power is `−ÿ_b p_y`: integrating it gives the work the base has done, the bound every
     /// run's energy must respect.
     pub fn vertical_momentum(&self) -> T {
-        let unit = self.sys.beam.element.gravity_force(T::one());
         let mut p = T::zero();
         for k in 0..N {
+            // On an arm, the element's own section and heads (as the energies).
+            let (_, unit) = self.element_and_unit_weight(k);
             p -= unit.dot(&crate::beam::gather(&self.state.v, k));
         }
         if S::HAS_TIP {
