@@ -48,8 +48,7 @@ fn tip_block_is_derivative_of_the_local_residual() {
         for ch in &chains {
             let nl = mode.independent().len();
             let loc0 = 4 * solver.n - 4;
-            let mut ql: Vec<f64> =
-                solver.gather_ind(&solver.equilibrium.q, mode)[loc0..].to_vec();
+            let mut ql: Vec<f64> = solver.gather_ind(&solver.equilibrium.q, mode)[loc0..].to_vec();
             let (mut vl, mut al) = (vec![0.0; nl], vec![0.0; nl]);
             for i in 0..nl {
                 let f = (i as f64 + 1.0) * 0.61;
