@@ -3,7 +3,8 @@
 //! `absorber_core::stops`, with the relative angle from the maximal coordinates).
 
 use super::kin::{Mode, NW, PHI};
-use super::{flight, lock, zeros, FullSolver, FullState, Solved, Work};
+use super::newton::Solved;
+use super::{flight, lock, zeros, FullSolver, FullState, Work};
 use absorber_core::newmark::AlphaRecursion;
 use absorber_core::tip::Chain;
 use absorber_core::{Contact, Error, Impact, ImpactModel, NewtonKind, Side, StepReport};
