@@ -2,8 +2,9 @@
 //! motion, or from the multipliers of the augmented system), the constraint violation, the
 //! heights and energies, and the [`Simulator`] interface shared with the core.
 
+use super::assembly::{kron_i2, Block4};
 use super::kin::{Mode, MC, NW, PHI, PSI, RB1, RB2, RT1, RT2};
-use super::{kron_i2, lock, Block4, FullSolver, FullState};
+use super::{lock, FullSolver, FullState};
 use crate::sim::{Observation, Simulator};
 use absorber_core::ancf::{Element, ElementVector};
 use absorber_core::{Contact, Energies, Error, StepReport};

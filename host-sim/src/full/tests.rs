@@ -1,4 +1,5 @@
 use super::*;
+use absorber_core::tip::Chain;
 
 /// The residual from the augmented system equals the beam residual plus the reduced local
 /// residual (two routes to the same virtual work), and the Newton matrix is its derivative.
