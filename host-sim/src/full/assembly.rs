@@ -4,7 +4,8 @@
 
 use super::block::{DenseLu, Linear, Matrix};
 use super::kin::{Bodies, Mode, MC, NW, RB2, RT2};
-use super::{FullSolver, Kin};
+use super::partition::Kin;
+use super::FullSolver;
 use absorber_core::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector};
 use absorber_core::tip::Chain;
 use absorber_core::Error;

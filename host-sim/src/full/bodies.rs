@@ -3,7 +3,8 @@
 //! differences (the static solve's plumb ball, and the reference of the tests).
 
 use super::kin::{Mode, MC, NI, NW, RB2, RT2};
-use super::{FullSolver, Kin};
+use super::partition::Kin;
+use super::FullSolver;
 use absorber_core::scene::BallKind;
 use absorber_core::tip::{self, BallMode, Chain, LocalState, TipInertia, D5, LOCAL};
 use absorber_core::Error;

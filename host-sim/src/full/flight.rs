@@ -738,7 +738,7 @@ impl FullSolver {
     pub(super) fn ind_gradient(
         &self,
         mode: Mode,
-        kin: &super::Kin,
+        kin: &super::partition::Kin,
         g: &[f64; NW],
         ni: usize,
     ) -> Vec<f64> {

@@ -1,3 +1,4 @@
+use super::kin::Mode;
 use super::*;
 use absorber_core::tip::Chain;
 
