@@ -56,6 +56,18 @@
 //! relative angle `α = θ − ψ` and its gradient computed from the maximal coordinates. Newton:
 //! the core's rule (`absorber_core::newton`) for step solves — one matrix per solve, reused while
 //! it contracts — and a fresh matrix every iteration for static and acceleration solves.
+//!
+//! **Layout: the path of one step.** [`FullSolver::step`] (`step`: the Newmark or
+//! generalized-α predictor, then the stop events that split the step) calls `newton` (the
+//! iteration on `x`, and the state completed from the independent coordinates), whose every
+//! iterate is evaluated in `assembly` (element forces and blocks, the augmented system through
+//! the mass factor, the residual `Bᵀ M B δ` and its matrix) on the local kinematics of
+//! `partition` (indices, independent coordinates per contact mode, dependent positions,
+//! velocities and `B_d` from the constraints of `kin`), with the bodies' Newton block from
+//! `bodies`; the matrices are factored by `block` (or `sparse`). Flight, landings and stops in
+//! flight are in `flight`; the static equilibrium, restart and modes in `statics`; forces,
+//! energies and the [`Simulator`](crate::sim::Simulator) interface in `outputs`. This file holds
+//! the public types, the constructors and the kept scratch.
 
 mod assembly;
 mod block;

@@ -10,8 +10,6 @@ use absorber_core::tip::Chain;
 use absorber_core::{Contact, Error, Impact, ImpactModel, NewtonKind, Side, StepReport};
 
 impl FullSolver {
-    /// The Newton chain of a step of length `h`: `(κβh², κγh, 1)`, `κ = (1 − α_f)/(1 − α_m)`
-    /// (`κ = 1` for Newmark; `absorber_core::newmark`).
     /// How long an impulse of the over-step metric lasts \[s\]: the stop's contact time
     /// (`ball.stop_contact_time`) for a `stop` impulse when it is set, else the step.
     pub(super) fn impulse_duration(&self, stop: bool) -> f64 {
@@ -23,6 +21,8 @@ impl FullSolver {
         }
     }
 
+    /// The Newton chain of a step of length `h`: `(κβh², κγh, 1)`, `κ = (1 − α_f)/(1 − α_m)`
+    /// (`κ = 1` for Newmark; `absorber_core::newmark`).
     pub(super) fn step_chain(&self, h: f64) -> Chain<f64> {
         let it = &self.params.integrator;
         AlphaRecursion::chain(it, AlphaRecursion::of(it).as_ref(), h)
