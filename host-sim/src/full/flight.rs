@@ -42,7 +42,7 @@
 //! takes off there if the track pulls. The flying ball's centre is integrated exactly (the
 //! core's `System::fly`: its acceleration `(0, −g_eff)` is known, linear in time over a step).
 
-use super::{lock, FullSolver, FullState, Work};
+use super::{FullSolver, FullState, Work};
 use crate::full::kin::{Mode, NW, PHI, PSI, RB1, RB2};
 use absorber_core::flight::{bounce_impulse, hermite_root, landing_bounces, separation_fraction};
 use absorber_core::tip::Chain;
@@ -349,7 +349,7 @@ impl FullSolver {
         }
         let mut warm = self.local_of(&s.q);
         let mut y = g.to_vec();
-        let mut guard = lock(&self.work);
+        let mut guard = self.work.borrow_mut();
         let Work { mass, reduced, .. } = &mut *guard;
         let lu = self.reduced_lu(reduced, qi.len())?;
         self.evaluate(
@@ -516,7 +516,7 @@ impl FullSolver {
         s.q[i1] = a[0] + rho * n[0];
         s.q[i2] = a[1] + rho * n[1];
         {
-            let mut work = lock(&self.work);
+            let mut work = self.work.borrow_mut();
             work.projection = work.projection.max((rel.r - rho).abs());
         }
         let normal_speed = n[0] * rel.rate[0] + n[1] * rel.rate[1];
@@ -862,7 +862,7 @@ mod tests {
             if let Some(l) = r.landing {
                 assert!(l.bounced, "elastic landings bounce");
                 landings += 1;
-                projection += lock(&s.work).projection;
+                projection += s.work.borrow_mut().projection;
             }
             worst = worst.max((energy(&s) - e0).abs());
         }

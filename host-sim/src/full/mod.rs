@@ -88,7 +88,8 @@ use assembly::{ElementConst, MassFactor};
 pub use block::Linear;
 use block::Matrix;
 use kin::Bodies;
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::cell::RefCell;
+use std::sync::Arc;
 
 /// Which bodies the full solver models.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -151,7 +152,10 @@ pub struct FullState {
     pub lifted: bool,
 }
 
-/// Factorizations kept between solves (behind a mutex: the solver's methods take `&self`).
+/// Factorizations and scratch kept between solves. The solver's methods take `&self` (a step
+/// reads the solver throughout while it writes these), so the solver owns them in a
+/// [`RefCell`]: one owner, no lock, cloned with the solver. No method that borrows them calls
+/// another that does (a second borrow would be a bug, and panics).
 #[derive(Clone, Debug)]
 struct Work {
     mass: MassFactor,
@@ -166,7 +170,7 @@ struct Work {
 }
 
 /// The full solver (see the module documentation).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct FullSolver {
     params: Params<f64>,
     scene: SceneKind,
@@ -193,39 +197,8 @@ pub struct FullSolver {
     linear: Linear,
     /// Per-element assembly constants: one for the uniform beam, one per element of an arm.
     consts: Arc<[ElementConst]>,
-    work: Mutex<Work>,
-}
-
-impl Clone for FullSolver {
-    fn clone(&self) -> Self {
-        let work = lock(&self.work).clone();
-        Self {
-            params: self.params,
-            scene: self.scene,
-            n: self.n,
-            element: self.element,
-            me: self.me,
-            kb: self.kb,
-            arm: self.arm.clone(),
-            loads: self.loads.clone(),
-            bodies: self.bodies,
-            n_body: self.n_body,
-            nz: self.nz,
-            state: self.state.clone(),
-            equilibrium: self.equilibrium.clone(),
-            eq_heights: self.eq_heights,
-            last_landing: self.last_landing,
-            linear: self.linear,
-            consts: Arc::clone(&self.consts),
-            work: Mutex::new(work),
-        }
-    }
-}
-
-/// The kept factorizations (a poisoned lock still holds valid data: every use rebuilds what
-/// it factors).
-fn lock(w: &Mutex<Work>) -> MutexGuard<'_, Work> {
-    w.lock().unwrap_or_else(|e| e.into_inner())
+    /// The kept factorizations and scratch ([`Work`]).
+    work: RefCell<Work>,
 }
 
 /// A zero vector of length `n` from the allocator's thread cache: `vec![0.0; n]` asks
@@ -339,7 +312,7 @@ impl FullSolver {
             last_landing: None,
             linear: Linear::Block,
             consts: Arc::new([ElementConst::of(&element, &me, &kb)]),
-            work: Mutex::new(Work {
+            work: RefCell::new(Work {
                 mass,
                 reduced: [None, None, None],
                 projection: 0.0,
@@ -387,7 +360,7 @@ impl FullSolver {
             .map(|sec| ElementConst::of(&sec.beam.element, &sec.beam.mass, &sec.beam.stiffness))
             .collect();
         s.arm = Some(sections.into());
-        *lock(&s.work) = Work {
+        *s.work.get_mut() = Work {
             mass,
             reduced: [None, None, None],
             projection: 0.0,
@@ -442,7 +415,7 @@ impl FullSolver {
             None => Self::mass_factor(self.n, self.n_body, |_| &self.me, &self.bodies, linear)?,
         };
         self.linear = linear;
-        let mut w = lock(&self.work);
+        let w = self.work.get_mut();
         w.mass = mass;
         w.reduced = [None, None, None];
         Ok(())

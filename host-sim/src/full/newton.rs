@@ -2,7 +2,7 @@
 //! reuse and damping), and the full state completed from the independent coordinates.
 
 use super::kin::{Mode, NW, PHI};
-use super::{lock, zeros, FullSolver, FullState, Work};
+use super::{zeros, FullSolver, FullState, Work};
 use absorber_core::model::{DAMPING_TRIALS, MAX_STEP};
 use absorber_core::newton::{SETTLE, SLOW};
 use absorber_core::tip::Chain;
@@ -45,7 +45,7 @@ impl FullSolver {
         } else {
             None
         };
-        let mut guard = lock(&self.work);
+        let mut guard = self.work.borrow_mut();
         let Work {
             mass,
             reduced,

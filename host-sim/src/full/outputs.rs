@@ -4,7 +4,7 @@
 
 use super::assembly::{kron_i2, Block4};
 use super::kin::{Mode, MC, NW, PHI, PSI, RB1, RB2, RT1, RT2};
-use super::{lock, FullSolver, FullState};
+use super::{FullSolver, FullState};
 use crate::sim::{Observation, Simulator};
 use absorber_core::ancf::{Element, ElementVector};
 use absorber_core::{Contact, Energies, Error, StepReport};
@@ -28,7 +28,7 @@ impl FullSolver {
         let ai = self.gather_ind(&s.a, mode);
         let mut warm = self.local_of(&s.q);
         let ev = self.evaluate_with(
-            &mut lock(&self.work).mass,
+            &mut self.work.borrow_mut().mass,
             None,
             &qi,
             &vi,

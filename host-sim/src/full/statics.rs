@@ -2,7 +2,7 @@
 //! the mass and stiffness linearized about it with the natural frequencies.
 
 use super::kin::{Mode, PHI};
-use super::{lock, FullSolver, Work};
+use super::{FullSolver, Work};
 use absorber_core::model::{END_BEYOND_STOP, START_BEYOND_STOP};
 use absorber_core::tip::Chain;
 use absorber_core::{Contact, Error};
@@ -131,7 +131,7 @@ impl FullSolver {
         let z = vec![0.0; qi.len()];
         let g = self.params.gravity;
         let mut warm = self.local_of(&s.q);
-        let mut guard = lock(&self.work);
+        let mut guard = self.work.borrow_mut();
         let Work { mass, reduced, .. } = &mut *guard;
         let lu = self.reduced_lu(reduced, qi.len())?;
         let mut derivative = |ch: Chain<f64>| {

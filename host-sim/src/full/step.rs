@@ -4,7 +4,7 @@
 
 use super::kin::{Mode, NW, PHI};
 use super::newton::Solved;
-use super::{flight, lock, zeros, FullSolver, FullState, Work};
+use super::{flight, zeros, FullSolver, FullState, Work};
 use absorber_core::newmark::AlphaRecursion;
 use absorber_core::tip::Chain;
 use absorber_core::{Contact, Error, Impact, ImpactModel, NewtonKind, Side, StepReport};
@@ -168,7 +168,7 @@ impl FullSolver {
         let h = self.params.integrator.step;
         // (Borrowed, not cloned: the events only read it, and it is replaced at the end.)
         let start = &self.state;
-        lock(&self.work).projection = 0.0;
+        self.work.borrow_mut().projection = 0.0;
         let (trial, solved) = self.newmark(start, h, base_accel)?;
         let mut report = StepReport {
             iterations: solved.iterations,
@@ -400,7 +400,7 @@ impl FullSolver {
             let mut warm = w;
             let mut y = grad.clone();
             {
-                let mut guard = lock(&self.work);
+                let mut guard = self.work.borrow_mut();
                 let Work { mass, reduced, .. } = &mut *guard;
                 let lu = self.reduced_lu(reduced, ni)?;
                 self.evaluate(

@@ -128,7 +128,7 @@ fn block_and_sparse_lu_agree_on_real_steps() {
         let ai = s.gather_ind(&s.state.a, mode);
         let ch = s.step_chain(s.params.integrator.step);
         let mut warm = s.local_of(&s.state.q);
-        let mut guard = lock(&s.work);
+        let mut guard = s.work.borrow_mut();
         let Work { mass, reduced, .. } = &mut *guard;
         let lu = s.reduced_lu(reduced, ni).expect("pattern");
         let ev = s
@@ -208,7 +208,7 @@ fn newton_matrix_is_derivative(s: &FullSolver, mode: Mode) {
         c_m: 1.0,
     };
     let mut warm = s.local_of(&s.equilibrium.q);
-    let mut guard = lock(&s.work);
+    let mut guard = s.work.borrow_mut();
     let Work { mass, reduced, .. } = &mut *guard;
     let lu = s.reduced_lu(reduced, ni).expect("pattern");
     assert_eq!(lu.n(), ni);
