@@ -2,8 +2,9 @@
 //! right-hand side of the augmented system (22), its Schur complement on the local constraints,
 //! and the residual `Bᵀ M B δ` of the independent accelerations with its Newton matrix.
 
-use super::block::{DenseLu, Linear, Matrix};
+use super::dense::DenseLu;
 use super::kin::{Bodies, Mode, MC, NW, RB2, RT2};
+use super::matrix::{Linear, Matrix};
 use super::partition::Kin;
 use super::FullSolver;
 use absorber_core::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector};

@@ -57,23 +57,25 @@
 //! the core's rule (`absorber_core::newton`) for step solves — one matrix per solve, reused while
 //! it contracts — and a fresh matrix every iteration for static and acceleration solves.
 //!
-//! **Layout: the path of one step.** [`FullSolver::step`] (`step`: the Newmark or
-//! generalized-α predictor, then the stop events that split the step) calls `newton` (the
-//! iteration on `x`, and the state completed from the independent coordinates), whose every
-//! iterate is evaluated in `assembly` (element forces and blocks, the augmented system through
-//! the mass factor, the residual `Bᵀ M B δ` and its matrix) on the local kinematics of
-//! `partition` (indices, independent coordinates per contact mode, dependent positions,
-//! velocities and `B_d` from the constraints of `kin`), with the bodies' Newton block from
-//! `bodies`; the matrices are factored by `block` (or `sparse`). Flight, landings and stops in
-//! flight are in `flight`; the static equilibrium, restart and modes in `statics`; forces,
-//! energies and the [`Simulator`](crate::sim::Simulator) interface in `outputs`. This file holds
-//! the public types, the constructors and the kept scratch.
+//! **Layout: the path of one step.** [`FullSolver::step`] (`step`: the Newmark or generalized-α
+//! predictor, then the stop events that split the step) calls `newton` (the iteration on `x`, and
+//! the state completed from the independent coordinates), whose every iterate is evaluated in
+//! `assembly` (element forces and blocks, the augmented system through the mass factor, the
+//! residual `Bᵀ M B δ` and its matrix) on the local kinematics of `partition` (indices, independent
+//! coordinates per contact mode, dependent positions, velocities and `B_d` from the constraints of
+//! `kin`), with the bodies' Newton block from `bodies`; the matrices (`matrix`) are factored by the
+//! block LU of `block` (or `sparse`), the small dense systems by `dense`. Flight, landings and
+//! stops in flight are in `flight` (its impulses in `flight::impulse`); the static equilibrium,
+//! restart and modes in `statics`; forces, energies and the [`Simulator`](crate::sim::Simulator)
+//! interface in `outputs`. This file holds the public types, the constructors and the kept scratch.
 
 mod assembly;
 mod block;
 mod bodies;
+mod dense;
 mod flight;
 pub mod kin;
+mod matrix;
 mod newton;
 mod outputs;
 mod partition;
@@ -85,9 +87,9 @@ use absorber_core::ancf::{Element, ElementMatrix};
 use absorber_core::loads::{arm_section, ArmParams, Section};
 use absorber_core::{Contact, Error, Landing, Params};
 use assembly::{ElementConst, MassFactor};
-pub use block::Linear;
-use block::Matrix;
 use kin::Bodies;
+pub use matrix::Linear;
+use matrix::Matrix;
 use std::cell::RefCell;
 use std::sync::Arc;
 

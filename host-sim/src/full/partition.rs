@@ -2,7 +2,7 @@
 //! of each contact mode (eq. 28), and the local kinematics — the dependent positions from
 //! `C = 0`, the dependent velocities from `C_q q̇ = 0`, `B_d` and the dependent accelerations.
 
-use super::block::DenseLu;
+use super::dense::DenseLu;
 use super::kin::{Cons, Mode, MC, NI, NW, PHI, RB1, RB2};
 use super::{FullSolver, SceneKind};
 use absorber_core::{Contact, Error};
