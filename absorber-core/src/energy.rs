@@ -317,12 +317,11 @@ mod tests {
     /// unchanged) raises the energy by `m g d` with m the tube's mass by Gauss quadrature over
     /// the taper plus the heads' ([`ArmParams::total_mass`], 528.2 kg, not `[beam] mass` =
     /// 577 kg), to 1e-12; the same for a base displacement. Independent of the closed-form
-    /// weight vectors the energies sum. The sign sits 0.26 m in from the end here: a head at
-    /// exactly the end node is dropped by the sections when `(L − x₀)/l` rounds above 1
-    /// (f64, N = 3), a defect of the section builder, not of the energies.
+    /// weight vectors the energies sum. The sign sits at the end node, where `(L − x₀)/l`
+    /// rounds to `1 + 2.2e-16` (f64, N = 3): the head's owner element still holds it.
     #[test]
     fn arm_gravity_energy_counts_the_taper_and_the_heads() {
-        let (p, arm) = mast_arm(16.5);
+        let (p, arm) = mast_arm(16.76);
         let mut m = MastArm::arm_at_rest(p, &arm, 0.0).expect("arm");
         let total = arm.total_mass(p.beam.length);
         assert!(
@@ -362,11 +361,10 @@ mod tests {
     /// interpolation of the solved nodes, μ_k the element's mass per length) plus `m y(x_p)` of
     /// each head, independently of the weight vectors the model sums. Budget 1e-4: a linear
     /// structure gives equality; the geometric nonlinearity is of order (sag/L)², 6e-6 at a
-    /// tenth of g (41 mm of sag; at full g, 0.40 m, it is 4e-4). The sign inside the last
-    /// element (see the test above).
+    /// tenth of g (41 mm of sag; at full g, 0.40 m, it is 4e-4). The sign at the end node.
     #[test]
     fn arm_strain_energy_at_equilibrium_is_half_the_work_of_its_weight() {
-        let (mut p, arm) = mast_arm(16.5);
+        let (mut p, arm) = mast_arm(16.76);
         p.gravity = 0.981;
         let m = MastArm::arm_at_rest(p, &arm, 0.0).expect("arm");
         let q = m.state().q;
