@@ -105,11 +105,10 @@ impl FullSolver {
     }
 
     pub(super) fn heights(&self, s: &FullState) -> (f64, f64, f64) {
-        let unit = self.element.gravity_force(1.0);
         let mut beam = 0.0;
         for e in 0..self.n {
             let u = ElementVector::<f64>::from_fn(|i, _| s.q[4 * e + i]);
-            beam -= unit.dot(&u);
+            beam -= self.unit_weight(e).dot(&u);
         }
         let tip = if self.n_body >= 3 {
             s.q[self.zloc(RT2)]
@@ -122,6 +121,30 @@ impl FullSolver {
             0.0
         };
         (beam, tip, ball)
+    }
+
+    /// Element `e`'s weight per unit downward field, `Q_e(g = 1)` (paper eq. 17): the uniform
+    /// beam's, or on an arm the element's own section with its heads (the core's
+    /// [`absorber_core::loads::Section::weight`], the force the step applies).
+    fn unit_weight(&self, e: usize) -> ElementVector<f64> {
+        match self.arm.as_deref().and_then(|sec| sec.get(e)) {
+            Some(sec) => sec.weight(1.0),
+            None => self.element.gravity_force(1.0),
+        }
+    }
+
+    /// Mass of the beam, tube and heads \[kg\]: `[beam] mass` for the uniform beam; on an arm
+    /// `−Σ_e (Q_e(g = 1)_y₁ + Q_e(g = 1)_y₂)` (the value shape functions sum to one).
+    fn beam_mass(&self) -> f64 {
+        if self.arm.is_none() {
+            return self.params.beam.mass;
+        }
+        (0..self.n)
+            .map(|e| {
+                let w = self.unit_weight(e);
+                -(w[1] + w[5])
+            })
+            .sum()
     }
 
     pub(super) fn tip_angle_of(&self, s: &FullState) -> (f64, f64) {
@@ -220,7 +243,7 @@ impl Simulator for FullSolver {
         }
         let now = self.heights(s);
         let eq = self.eq_heights;
-        e.beam_potential = g * (now.0 - eq.0 + self.params.beam.mass * base_displacement);
+        e.beam_potential = g * (now.0 - eq.0 + self.beam_mass() * base_displacement);
         if self.n_body >= 3 {
             let p = &self.params.tip;
             let (vx, vy) = (s.v[self.zloc(RT1)], s.v[self.zloc(RT2)] + base_velocity);
