@@ -165,6 +165,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let mut mid = *start;
         self.sub_step(start, h1, accel_mid, ws, report, &mut mid)?;
         mid.time = start.time + h1;
+        self.event_accel(start, trial, tau, &mut mid);
         let impact = self.impact(&mut mid, side, inside, ws)?;
         report.events.impacts += 1;
         if !impact.stuck {
