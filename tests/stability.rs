@@ -168,8 +168,8 @@ fn violent_steps_converge_in_both_precisions() {
         }
         (worst, impacts, total as f64 / (20.0 / h))
     }
-    // The rolling model's Newton (the subject here); with flight on, f32 diverges at 1.53 s at
-    // this 3.4 g input (a known issue of the stability matrix).
+    // The rolling model's Newton (the subject here), so the ball is held on the track; the
+    // matrix runs the same input with flight on too.
     let mut p = absorber_core::Params::<f64>::default();
     p.ball.flight = false;
     let (w64, i64_, m64) = run(p);

@@ -1440,20 +1440,6 @@ pub fn matrix(length: Length) -> Vec<Case> {
         known_issue: None,
         arm: None,
     });
-    for c in cases.iter_mut() {
-        if c.name == "stops every cycle (5 mm), e = 0" && c.engine == C32 {
-            c.known_issue = Some(
-                "ball flight in f32 with plastic stops: at 1.575 s a step's Newton stalls at an \
-                 increment of 2.2e-5 (tolerance 1e-5); f64 and the ball held on the track run",
-            );
-        }
-        if c.name == "amplitude 50 mm at 4.13 Hz" && c.engine == C32 {
-            c.known_issue = Some(
-                "ball flight in f32 at 3.4 g (tip rotations near 1 rad): the step after a landing \
-                 diverges at 1.53 s; f64 and the ball held on the track (ball.flight = false) run",
-            );
-        }
-    }
     cases.extend(arm_cases(quick));
     cases
 }
