@@ -363,18 +363,11 @@ impl<T: Real, const N: usize> SceneData<T, N> for ArmData<T, N> {
 
 /// The element of `n` on `[0, length]` that holds a point at `position`: `⌈n x / L⌉ − 1`
 /// clamped to `0 ..= n − 1`, so a point exactly at a node belongs to the element on its left and
-/// the root's to element 0. Decided once in `f64` (a count, not a value the step computes with).
+/// the root's to element 0. Counted as the interior nodes `j` below `n x / L` (no float-to-integer
+/// conversion and no `f64` arithmetic on an `f32` target).
 pub fn owner_element<T: Real>(position: T, length: T, n: usize) -> usize {
-    let r = crate::scalar::to_f64(position) / crate::scalar::to_f64(length) * n as f64;
-    if r.is_nan() || r <= 1.0 {
-        return 0;
-    }
-    let c = libm::ceil(r);
-    if c >= n as f64 {
-        n.saturating_sub(1)
-    } else {
-        c as usize - 1
-    }
+    let r = position / length * lit::<T>(n as f64);
+    (1..n).filter(|&j| lit::<T>(j as f64) < r).count()
 }
 
 /// The sections of an `n`-element arm, one source for the core and the full solver: element

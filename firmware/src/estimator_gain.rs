@@ -7,7 +7,7 @@ pub const BEAM: [f32; 5] = [f32::from_bits(0x4186147b), f32::from_bits(0x4410400
 /// Integrator: γ, β, α_m, α_f, h, tolerance.
 pub const INTEGRATOR: [f32; 6] = [f32::from_bits(0x3f0d7943), f32::from_bits(0x3e8dd409), f32::from_bits(0x3ed79436), f32::from_bits(0x3ef286bd), f32::from_bits(0x3c23d70a), f32::from_bits(0x358637bd)];
 /// Stiffness-proportional damping c \[s\], E·I calibration factor, gravity.
-pub const DAMPING_CALIBRATION_GRAVITY: [f32; 3] = [f32::from_bits(0x3a7309b7), f32::from_bits(0x3f841db7), f32::from_bits(0x411cf5c3)];
+pub const DAMPING_CALIBRATION_GRAVITY: [f32; 3] = [f32::from_bits(0x3a7309b7), f32::from_bits(0x3f91a31f), f32::from_bits(0x411cf5c3)];
 /// Arm: root and tip diameter, wall, density.
 pub const ARM: [f32; 4] = [f32::from_bits(0x3ea8f5c3), f32::from_bits(0x3e09ba5e), f32::from_bits(0x3b95182b), f32::from_bits(0x45f55000)];
 /// Point masses (position, mass).
@@ -21,8 +21,8 @@ pub const CATEGORY: absorber_core::monitor::DetailCategory =
     absorber_core::monitor::DetailCategory::EPrime;
 /// Gain rows: q, v, a, pseudo_accel.
 pub const GAIN_Q: [f32; 12] = [f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000)];
-pub const GAIN_V: [f32; 12] = [f32::from_bits(0xb5a5d21a), f32::from_bits(0xb832002d), f32::from_bits(0xb4e7cf28), f32::from_bits(0xb76c7294), f32::from_bits(0xb784bf71), f32::from_bits(0xba0a80ad), f32::from_bits(0xb7079dd4), f32::from_bits(0xb98a4037), f32::from_bits(0x391abc28), f32::from_bits(0x3b86b1af), f32::from_bits(0x38f1be83), f32::from_bits(0x3b55ad2c)];
-pub const GAIN_A: [f32; 12] = [f32::from_bits(0xb8e7de9b), f32::from_bits(0x3b0bcdcd), f32::from_bits(0xb78b32d5), f32::from_bits(0x3ab3dc6e), f32::from_bits(0xbaed3258), f32::from_bits(0xbd4613e6), f32::from_bits(0xbaa5bbf6), f32::from_bits(0xbd281ecb), f32::from_bits(0x3d0f1daa), f32::from_bits(0x3f7f7b38), f32::from_bits(0x3cc4f154), f32::from_bits(0x3f2e08a3)];
-pub const GAIN_PA: [f32; 12] = [f32::from_bits(0xb8d29e05), f32::from_bits(0x3aff61a8), f32::from_bits(0xb77e3cb1), f32::from_bits(0x3aa2a9af), f32::from_bits(0xbad7a067), f32::from_bits(0xbd341326), f32::from_bits(0xba968982), f32::from_bits(0xbd18b2f5), f32::from_bits(0x3d02183c), f32::from_bits(0x3f683cea), f32::from_bits(0x3cb3032d), f32::from_bits(0x3f1e3080)];
+pub const GAIN_V: [f32; 12] = [f32::from_bits(0xb5f85bd0), f32::from_bits(0xb88b6bf3), f32::from_bits(0xb52a6a85), f32::from_bits(0xb7c7da51), f32::from_bits(0xb7a82bf5), f32::from_bits(0xba364cde), f32::from_bits(0xb715f020), f32::from_bits(0xb99c87fd), f32::from_bits(0x39078e38), f32::from_bits(0x3b6e1b8f), f32::from_bits(0x38e206fc), f32::from_bits(0x3b4b45a7)];
+pub const GAIN_A: [f32; 12] = [f32::from_bits(0xb9379ffe), f32::from_bits(0x3b2ce105), f32::from_bits(0xb7e3c386), f32::from_bits(0x3aca27bd), f32::from_bits(0xbb054314), f32::from_bits(0xbd55ba1d), f32::from_bits(0xbaa61023), f32::from_bits(0xbd2b3b7d), f32::from_bits(0x3d0afda9), f32::from_bits(0x3f7eb8ac), f32::from_bits(0x3cbcb5ea), f32::from_bits(0x3f299ee6)];
+pub const GAIN_PA: [f32; 12] = [f32::from_bits(0xb926d5f7), f32::from_bits(0x3b1e2986), f32::from_bits(0xb7d01185), f32::from_bits(0x3ab65eca), f32::from_bits(0xbaf258e6), f32::from_bits(0xbd425af2), f32::from_bits(0xba96cd84), f32::from_bits(0xbd1b7b9d), f32::from_bits(0x3cfcbf49), f32::from_bits(0x3f679a07), f32::from_bits(0x3cab8f77), f32::from_bits(0x3f1a34c5)];
 /// Load gain, load decay, bias gain, stress sd, load sd, innovation sd.
-pub const GAIN_SCALARS: [f32; 6] = [f32::from_bits(0x407255ba), f32::from_bits(0x3f7f7d0f), f32::from_bits(0x38bc3497), f32::from_bits(0x48a9678d), f32::from_bits(0x40f78938), f32::from_bits(0x3ce434d3)];
+pub const GAIN_SCALARS: [f32; 6] = [f32::from_bits(0x40b67eca), f32::from_bits(0x3f7f7d0f), f32::from_bits(0x3914f808), f32::from_bits(0x48a9c93b), f32::from_bits(0x40f814f8), f32::from_bits(0x3c902812)];
