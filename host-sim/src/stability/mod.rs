@@ -309,7 +309,7 @@ pub trait Probe {
     fn alpha(&self) -> f64;
     /// The ingredients of the load work and of generalized-α's energy balance (docs/model.md,
     /// "Energy balance of a step"), in the solver's own coordinates; `None` where the solver's
-    /// energies cannot be checked (the full solver on an arm: see [`arm_cases`]).
+    /// solver has no load-work terms (the full solver on an arm: see [`arm_cases`]).
     fn balance(&self) -> Option<&dyn Balance> {
         None
     }
@@ -1447,12 +1447,12 @@ pub fn matrix(length: Length) -> Vec<Case> {
 /// The shipped traffic-signal arm (`scenes/mast-arm.toml`: tapered tube, heads, N = 3,
 /// generalized-α, h = 10 ms, the pole at rest) under its own loads and under the loads a
 /// structural engineer checks it for. The core's energy balance is checked with the work of the
-/// loads (see the page's introduction); the full solver's is not: its gravitational energy of
-/// an arm sums the uniform root section's weight without the heads, so its E is not the
-/// arm's (its steps use the sections: the runs are compared by the tip).
+/// loads (see the page's introduction); the full solver's is not yet: it does not implement
+/// [`Balance`] (the load vector, mass and generalized-α lag in its own coordinates), so its runs
+/// are compared by the tip.
 fn arm_cases(quick: bool) -> Vec<Case> {
-    const FULL: &str = "energy margin not checked: the full solver's gravitational energy of an \
-                        arm is that of the uniform root section without the heads";
+    const FULL: &str = "energy margin not checked: the full solver has no load-work terms yet \
+                        (`Balance`)";
     let scene = crate::scene::Scene::from_toml(include_str!("../../../scenes/mast-arm.toml"));
     let setup = scene.and_then(|sc| {
         let f = &sc.file;
@@ -1535,8 +1535,8 @@ fn arm_cases(quick: bool) -> Vec<Case> {
                 vec![storm],
                 "the gust force ignores the arm's own velocity (no aerodynamic damping, 0.3 % \
                  structural), so the swing is an upper bound",
-                "energy margin not checked: the full solver's gravitational energy of an arm \
-                 is that of the uniform root section without the heads; the gust force ignores \
+                "energy margin not checked: the full solver has no load-work terms yet \
+                 (`Balance`); the gust force ignores \
                  the arm's own velocity (no aerodynamic damping, 0.3 % structural), so the \
                  swing is an upper bound",
             ),
@@ -1544,8 +1544,8 @@ fn arm_cases(quick: bool) -> Vec<Case> {
                 "truck gusts 1.75 kPa (7× shipped) every 4 s, 8–11.7 m",
                 vec![truck],
                 "passages 4 s apart, about 4 periods of f₁ = 1.03 Hz: the swing builds up",
-                "energy margin not checked: the full solver's gravitational energy of an arm \
-                 is that of the uniform root section without the heads; passages 4 s apart, \
+                "energy margin not checked: the full solver has no load-work terms yet \
+                 (`Balance`); passages 4 s apart, \
                  about 4 periods of f₁ = 1.03 Hz: the swing builds up",
             ),
             (
