@@ -391,6 +391,7 @@ impl FullSolver {
         let h1 = tau * h;
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
         let mut mid = self.sub_step(start, h1, accel_mid, report)?;
+        self.event_accel(start, &trial, tau, &mut mid)?;
         match event {
             FlightEvent::Landing => self.land(&mut mid, report)?,
             FlightEvent::Stop(side, inside) => {

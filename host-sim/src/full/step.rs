@@ -290,6 +290,7 @@ impl FullSolver {
         } else {
             start.clone()
         };
+        self.event_accel(start, trial, tau, &mut mid)?;
         let before = mid.clone();
         let impact = self.impact(&mut mid, side, inside)?;
         report.events.impacts += 1;
@@ -320,6 +321,53 @@ impl FullSolver {
         }
         report.impact = Some(impact);
         Ok(end)
+    }
+
+    /// The beam's accelerations at an event a fraction `tau` into a step from `start` whose
+    /// trial end is `trial`, with a dissipative scheme (γ > ½): the step's ends' interpolated
+    /// linearly in place of the short sub-step's own, whose stiff modes carry their full
+    /// acceleration into the rest of the step (the core's `System::event_accel`, which gives
+    /// the numbers). The ball's independent entries (its spin; in flight its centre) keep the
+    /// sub-step's; the bodies' dependent accelerations are completed from these, so the state
+    /// stays consistent with the constraints.
+    pub(super) fn event_accel(
+        &self,
+        start: &FullState,
+        trial: &FullState,
+        tau: f64,
+        mid: &mut FullState,
+    ) -> Result<(), Error> {
+        if self.params.integrator.gamma <= 0.5 {
+            return Ok(());
+        }
+        let nb = 4 * self.n;
+        let lerp = |x0: &[f64], x1: &[f64], k: usize| {
+            let (a, b) = (
+                x0.get(4 + k).copied().unwrap_or(0.0),
+                x1.get(4 + k).copied().unwrap_or(0.0),
+            );
+            (1.0 - tau) * a + tau * b
+        };
+        let mode = self.mode(mid.contact);
+        let mut ai = self.gather_ind(&mid.a, mode);
+        for (k, a) in ai.iter_mut().take(nb).enumerate() {
+            *a = lerp(&start.a, &trial.a, k);
+        }
+        let pa_kept: Vec<(usize, f64)> = (nb..ai.len())
+            .map(|i| {
+                let z = self.ind_to_z(i);
+                (z, mid.pa.get(z).copied().unwrap_or(mid.a[z]))
+            })
+            .collect();
+        let mut out = self.with_accel(mid, &ai)?;
+        for k in 0..nb {
+            out.pa[4 + k] = lerp(&start.pa, &trial.pa, k);
+        }
+        for (z, p) in pa_kept {
+            out.pa[z] = p;
+        }
+        *mid = out;
+        Ok(())
     }
 
     /// The rolling ball put on the stop `side` and held there (plastic), with its consistent
