@@ -27,14 +27,22 @@ pub struct ChaosArgs {
     #[arg(long, default_value = "docs/chaos.md")]
     pub out: PathBuf,
     /// Excitation frequencies [Hz].
-    #[arg(long, value_delimiter = ',', default_value = "4.10,4.13")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "3.90,4.05,4.10,4.13,4.25"
+    )]
     pub freqs: Vec<f64>,
     /// Time steps h [s].
     #[arg(long, value_delimiter = ',', default_value = "0.003,0.001,0.0005")]
     pub steps: Vec<f64>,
     /// Configurations: `core3` (3 elements calibrated, f32: the embedded model), `core16`
     /// (core, 16 elements, f64), `full16` (full solver, 16 elements, f64), `core6`, `full6`.
-    #[arg(long, value_delimiter = ',', default_value = "core3,core16,full16")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "core3,core6,core16,full6,full16"
+    )]
     pub configs: Vec<String>,
     /// Members of each ensemble.
     #[arg(long, default_value_t = 8)]
@@ -159,15 +167,56 @@ struct Cell {
 pub const TOLERANCE: f64 = 0.10;
 
 /// `a` (embedded) against `r` (reference): `|a − r| ≤ max(spread, 10 % |r|)`, the spread the
-/// larger standard deviation; the relative difference.
-pub fn converges(a: &Spread, r: &Spread) -> (bool, f64) {
+/// larger standard deviation. Where the reference is 0 (no stop impact, no flight at all) only
+/// the spread is left: two zeros agree, a statistic the reference does not have at all must lie
+/// within the spread of the two ensembles.
+pub fn converges(a: &Spread, r: &Spread) -> bool {
     let diff = (a.mean - r.mean).abs();
     let spread = a.sd.max(r.sd);
-    let rel = diff / r.mean.abs();
-    (
-        diff <= spread.max(TOLERANCE * r.mean.abs()) && a.k > 0 && r.k > 0,
-        rel,
-    )
+    diff <= spread.max(TOLERANCE * r.mean.abs()) && a.k > 0 && r.k > 0
+}
+
+/// Whether the reference prints as 0 at the table's precision (`scale`, `prec` as in
+/// [`Spread::text`]): a percentage of it would be a ratio of rounding noise.
+fn shows_zero(r: &Spread, scale: f64, prec: usize) -> bool {
+    (r.mean * scale).abs() < 0.5 * 10f64.powi(-(prec as i32))
+}
+
+/// `a − r` and the spread as text: relative to the reference in %, or, where the reference
+/// prints as 0 (a relative difference has no meaning), in the statistic's own unit.
+fn difference(a: &Spread, r: &Spread, scale: f64, prec: usize) -> String {
+    let spread = a.sd.max(r.sd);
+    if !shows_zero(r, scale, prec) {
+        format!(
+            "{:+.1} % ({:.1} %)",
+            100.0 * (a.mean - r.mean) / r.mean.abs(),
+            100.0 * spread / r.mean.abs()
+        )
+    } else {
+        format!(
+            "{:+.p$} ({:.p$}), reference 0",
+            (a.mean - r.mean) * scale,
+            spread * scale,
+            p = prec
+        )
+    }
+}
+
+/// How far `a` is off `r`, for a verdict: "N % off", or where the reference prints as 0 what
+/// `a` has.
+fn off(a: &Spread, r: &Spread, scale: f64, prec: usize, what: &str) -> String {
+    if !shows_zero(r, scale, prec) {
+        format!(
+            "{what} {:.0} % off",
+            100.0 * (a.mean - r.mean).abs() / r.mean.abs()
+        )
+    } else {
+        format!(
+            "{what} {:.p$} where the reference has 0",
+            a.mean * scale,
+            p = prec
+        )
+    }
 }
 
 /// Runs the study and writes the document.
@@ -435,37 +484,28 @@ fn document(
                 for ((((_, label, scale, prec), sm), sr), sh) in
                     STATS.iter().zip(&mc.stats).zip(&rc.stats).zip(&rh.stats)
                 {
-                    let (ok_m, rel_m) = converges(sm, sr);
-                    let (ok_h, rel_h) = converges(sh, sr);
-                    let pct = |a: &Spread, b: &Spread| {
-                        format!(
-                            "{:+.1} % ({:.1} %)",
-                            100.0 * (a.mean - b.mean) / b.mean.abs(),
-                            100.0 * a.sd.max(b.sd) / b.mean.abs()
-                        )
-                    };
+                    let ok_m = converges(sm, sr);
+                    let ok_h = converges(sh, sr);
+                    let embedded = off(sm, sr, *scale, *prec, "embedded");
+                    let in_h = off(sh, sr, *scale, *prec, "at the coarse step");
                     let verdict = match (ok_m, ok_h) {
-                        (true, true) => "converged".to_string(),
-                        (false, true) => {
-                            format!("**not converged** (embedded {:.0} % off)", 100.0 * rel_m)
+                        (true, true) if sm.mean == 0.0 && sr.mean == 0.0 && sh.mean == 0.0 => {
+                            "converged (0 in all three)".to_string()
                         }
-                        (true, false) => format!(
-                            "**not converged in h** (reference moves {:.0} %)",
-                            100.0 * rel_h
-                        ),
-                        (false, false) => format!(
-                            "**not converged** (embedded {:.0} % off, reference moves {:.0} % in h)",
-                            100.0 * rel_m,
-                            100.0 * rel_h
-                        ),
+                        (true, true) => "converged".to_string(),
+                        (false, true) => format!("**not converged** ({embedded})"),
+                        (true, false) => format!("**not converged in h** (reference {in_h})"),
+                        (false, false) => {
+                            format!("**not converged** ({embedded}; reference {in_h})")
+                        }
                     };
                     let _ = writeln!(
                         d,
                         "| {label} | {} | {} | {} | {} | {verdict} |",
                         sm.text(*scale, *prec),
                         sr.text(*scale, *prec),
-                        pct(sm, sr),
-                        pct(sh, sr),
+                        difference(sm, sr, *scale, *prec),
+                        difference(sh, sr, *scale, *prec),
                     );
                 }
                 let _ = writeln!(d);
@@ -495,4 +535,61 @@ fn document(
             .join("; ")
     );
     d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spread(mean: f64, sd: f64) -> Spread {
+        Spread {
+            mean,
+            sd,
+            min: mean - sd,
+            max: mean + sd,
+            k: 8,
+        }
+    }
+
+    /// A statistic that is 0 in the reference (no flight at all off tuning) is compared in its
+    /// own unit: never a NaN or an infinite percentage in the document.
+    #[test]
+    fn a_zero_reference_is_compared_in_the_statistics_unit() {
+        let zero = spread(0.0, 0.0);
+        let hops = spread(4e-4, 2e-4); // a flight share of 0.04 % ± 0.02 %
+        assert!(converges(&zero, &zero));
+        assert!(
+            !converges(&hops, &zero),
+            "0.04 % against none is outside a 0.02 % spread"
+        );
+        assert!(converges(&spread(1e-4, 2e-4), &zero));
+        assert_eq!(
+            difference(&zero, &zero, 100.0, 2),
+            "+0.00 (0.00), reference 0"
+        );
+        assert_eq!(
+            difference(&hops, &zero, 100.0, 2),
+            "+0.04 (0.02), reference 0"
+        );
+        assert_eq!(
+            off(&hops, &zero, 100.0, 2, "embedded"),
+            "embedded 0.04 where the reference has 0"
+        );
+        // A reference that only rounds to 0 (0.0007 %) is not a base for a percentage either.
+        let trace = spread(7e-6, 5e-6);
+        assert_eq!(
+            difference(&hops, &trace, 100.0, 2),
+            "+0.04 (0.02), reference 0"
+        );
+        assert!(!converges(&hops, &trace));
+        // A reference that is not 0 keeps the relative form and the 10 % rule.
+        let r = spread(2.0, 0.05);
+        assert_eq!(difference(&spread(2.1, 0.05), &r, 1.0, 2), "+5.0 % (2.5 %)");
+        assert!(converges(&spread(2.19, 0.05), &r));
+        assert!(!converges(&spread(2.21, 0.05), &r));
+        assert_eq!(
+            off(&spread(2.5, 0.0), &r, 1.0, 2, "embedded"),
+            "embedded 25 % off"
+        );
+    }
 }
