@@ -383,9 +383,29 @@ impl FullSolver {
     }
 
     /// The state with the ball put on the stop and held there (φ becomes dependent).
+    ///
+    /// The held constraint `θ − ψ = ±α_max` is met on the branch of θ nearest the ball's:
+    /// a ball that rolled over the top beyond the stops (α = θ − ψ unwrapped past ±π) meets
+    /// a stop at `±α_max + 2πk`, and θ is re-based by −2πk first (the orbit angle's branch,
+    /// `theta_ref`; φ, dependent here, follows from the no-slip constraint), as the core's
+    /// impact sets its spin so that α = ±α_max. Held on the old branch, the constraint
+    /// asked the ball's centre to turn 2πk about A in one solve: Newton diverged (elastic
+    /// stops at 5 mm, 4.13 Hz, a ball beyond the stops rolling back onto one at 2.127 s).
     pub(super) fn hold(&self, s: &FullState, side: Side) -> Result<FullState, Error> {
         let contact = Contact::OnStop(side);
         let mode = self.mode(contact);
+        let lock = side.sign::<f64>() * self.params.ball.stop_angle;
+        let turn = 2.0 * core::f64::consts::PI;
+        let k = ((self.relative_angle(s) - lock) / turn).round();
+        let rebased;
+        let s = if k != 0.0 {
+            let mut r = s.clone();
+            r.theta_ref -= turn * k;
+            rebased = r;
+            &rebased
+        } else {
+            s
+        };
         let qi = self.gather_ind(&s.q, mode);
         let vi = self.gather_ind(&s.v, mode);
         let ai = self.gather_ind(&s.a, mode);
@@ -408,6 +428,8 @@ impl FullSolver {
         let held = self.hold(s, side)?;
         let phi = self.zloc(PHI);
         s.q[phi] = held.q[phi];
+        // (On the held state's branch of θ: φ was re-based with it.)
+        s.theta_ref = held.theta_ref;
         s.contact = Contact::Off;
         let mode = Mode::Free;
         let qi = self.gather_ind(&s.q, mode);

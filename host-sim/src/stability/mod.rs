@@ -1440,15 +1440,6 @@ pub fn matrix(length: Length) -> Vec<Case> {
         known_issue: None,
         arm: None,
     });
-    for c in cases.iter_mut() {
-        if c.name == "stops every cycle (5 mm), e = 1" && c.engine == Engine::Full {
-            c.known_issue = Some(
-                "full solver with elastic stops and flight: with the event-acceleration rule \
-                 (the core's, which runs this case) a step after an event in flight diverges \
-                 at 2.13 s; cause not found",
-            );
-        }
-    }
     cases.extend(arm_cases(quick));
     cases
 }
