@@ -252,8 +252,6 @@ pub struct Ekf<T: Real, S: Scene, const N: usize, const D: usize, const M: usize
     w1: [[T; X]; X],
     w2: [[T; NOISE]; X],
     scratch: BandMatrix<T, D>,
-    /// The same, dense (for the products with the modes).
-    dense: SMatrix<T, D, D>,
     _scene: core::marker::PhantomData<S>,
 }
 
@@ -483,7 +481,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             w1: [[T::zero(); X]; X],
             w2: [[T::zero(); NOISE]; X],
             scratch: BandMatrix::zeros(),
-            dense: SMatrix::zeros(),
             _scene: core::marker::PhantomData,
         }
     }
@@ -814,14 +811,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // The dummy measurement that the load's running mean is zero.
         let mean_sd = self.config.load_mean_sd;
         if is_positive(self.mean_weight) && is_positive(mean_sd) {
-            let mut row = SVector::<T, X>::zeros();
-            row[ld + 2] = T::one();
             let mean_prior = (T::one() - self.mean_weight) * self.load_mean
                 + self.mean_weight
                     * (self.load_map[0][0] * self.load + self.load_map[0][1] * self.load_rate);
-            let innovation = -mean_prior - row.dot(&delta);
+            let innovation = -mean_prior - delta[ld + 2];
+            // The row is the unit vector of the slot: `Uᵀ h` is U's row.
+            let f = row_of(&u, ld + 2);
             let (gain, _) =
-                bierman(&mut u, &mut d, &row, mean_sd * mean_sd).ok_or(Error::NonFiniteState)?;
+                bierman_f(&mut u, &mut d, f, mean_sd * mean_sd).ok_or(Error::NonFiniteState)?;
             delta += gain * innovation;
         }
         // The correction in physical coordinates, onto the model's state at n + 1.
@@ -858,11 +855,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             * self.modulus;
         row[off + SensorKind::RootStrain.index()] = T::zero();
         let stress_var = quadratic(&self.ud_u, &self.ud_d, &row);
-        let load_sd = {
-            let mut e = SVector::<T, X>::zeros();
-            e[ld] = T::one();
-            quadratic(&self.ud_u, &self.ud_d, &e).max(T::zero()).sqrt()
-        };
+        let load_sd = quadratic_f(&row_of(&self.ud_u, ld), &self.ud_d)
+            .max(T::zero())
+            .sqrt();
         // Propagation to the next sample's prior.
         self.propagate(model, ball_free, ball_event, &report);
         self.samples = k_sample;
@@ -928,7 +923,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // R_q Φ_i → directions 0..M; R_v Φ_i → M..2M (right-hand sides, negated); the load
         // moves the predictor's positions by the residual static mode Ψ (module doc), so its
         // right-hand side is e_tip − R_q Ψ.
-        let mut y: SVector<T, D>;
+        let mut y = SVector::<T, D>::zeros();
         let mut load_rhs = SVector::<T, D>::zeros();
         for (block, ch) in [
             (0usize, unit(T::one(), T::zero())),
@@ -943,17 +938,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 &mut r,
                 &mut self.scratch,
             );
-            // All M products at once, dense (one pass over the matrix for M columns: cheaper
-            // than M banded products).
-            self.scratch.write_dense(&mut self.dense);
-            let rphi = self.dense * self.consistent;
+            // The products on the band (the same sums as the dense product, in the same order,
+            // without the terms outside the band, which are exact zeros).
+            let mut rphi = SMatrix::<T, D, M>::zeros();
+            self.scratch.mul_mat(&self.consistent, &mut rphi);
             for i in 0..M {
                 y = -column(&rphi, i);
                 model.work.solve(&mut y)?;
                 set_column(&mut self.dx, block + i, &y);
             }
             if block == 0 {
-                load_rhs = self.dense * self.residual;
+                self.scratch.mul_vec(&self.residual, &mut load_rhs);
             }
         }
         // The load: R_P = −e_tip, so J δx = e_tip − R_q Ψ.
@@ -963,7 +958,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         model.work.solve(&mut y)?;
         set_column(&mut self.dx, 2 * M, &y);
-        self.xi = self.basis.projection * self.dx;
+        // Only the directions' columns (the others are zero and unused).
+        for c in 0..=2 * M {
+            let xi = self.basis.projection * column(&self.dx, c);
+            set_column(&mut self.xi, c, &xi);
+        }
         // The stiff completion for the next step: the out-of-span part of the positions the
         // step gives each direction, `(I − ΦΠ)(b + c_q δx)` (the implicit step moves the stiff
         // coordinates onto their quasi-static response: `c_q J⁻¹ R_q ≈ I` on them, a
@@ -1009,8 +1008,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             }
             row[off + SensorKind::TipAccel.index()] = T::one();
         }
-        // Ball angle: ∇α · δq', δq' = δq* + c_q δx.
-        if matches!(S::BALL, BallKind::Free) {
+        // Ball angle: ∇α · δq', δq' = δq* + c_q δx (only read with the sensor).
+        if matches!(S::BALL, BallKind::Free)
+            && self.config.sensors.get(SensorKind::BallAngle).is_some()
+        {
             let x = Model::<T, S, N, D>::local(&s.q, &s.v, &s.a);
             let grad = tip::gap_gradient(&model.sys.inertia, &x);
             let end = 4 * N - 4;
@@ -1287,9 +1288,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // in a modal row, at most three in the load's and one in a bias's).
         let mut d1 = [T::zero(); X];
         let mut ur = [[T::zero(); X]; X];
+        // Row k of U is zero left of its diagonal: in the kept columns, before `first[k]`.
+        let mut first = [0usize; X];
         let mut n1 = 0;
         let columns = self.ud_u.as_slice().chunks_exact(X);
-        for (uk, dk) in columns.zip(self.ud_d.iter()) {
+        for ((uk, dk), fk) in columns.zip(self.ud_d.iter()).zip(first.iter_mut()) {
+            *fk = n1;
             if !is_positive(*dk) {
                 continue;
             }
@@ -1306,11 +1310,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         for (row, fi) in self.w1.iter_mut().zip(ft.as_slice().chunks_exact(X)) {
             let row = row.get_mut(..n1).unwrap_or(&mut []);
             row.fill(T::zero());
-            for (fik, uk) in fi.iter().zip(ur.iter()) {
+            for ((fik, uk), fk) in fi.iter().zip(ur.iter()).zip(first.iter()) {
                 if *fik != T::zero() {
-                    for (x, y) in row.iter_mut().zip(uk.iter()) {
-                        *x += *fik * *y;
-                    }
+                    let (Some(x), Some(y)) = (row.get_mut(*fk..), uk.get(*fk..)) else {
+                        continue;
+                    };
+                    axpy(x, *fik, y);
                 }
             }
         }
@@ -1400,10 +1405,24 @@ fn quadratic<T: Real, const X: usize>(
     d: &SVector<T, X>,
     h: &SVector<T, X>,
 ) -> T {
-    let f = u.tr_mul(h);
+    quadratic_f(&u.tr_mul(h), d)
+}
+
+/// `Σ_j f_j² d_j` for `f = Uᵀ h` given.
+fn quadratic_f<T: Real, const X: usize>(f: &SVector<T, X>, d: &SVector<T, X>) -> T {
     f.iter()
         .zip(d.iter())
         .fold(T::zero(), |acc, (fi, di)| acc + *fi * *fi * *di)
+}
+
+/// Row `k` of `u` (`Uᵀ e_k`, the same numbers `u.tr_mul` gives for the unit vector: one
+/// nonzero product per entry), read through its storage; zero if `k` is out of range.
+fn row_of<T: Real, const X: usize>(u: &SMatrix<T, X, X>, k: usize) -> SVector<T, X> {
+    let mut f = SVector::<T, X>::zeros();
+    for (fj, col) in f.iter_mut().zip(u.as_slice().chunks_exact(X)) {
+        *fj = col.get(k).copied().unwrap_or(T::zero());
+    }
+    f
 }
 
 /// Bierman's scalar measurement update of `P = U D Uᵀ` for the row `h` and noise variance
@@ -1417,6 +1436,16 @@ fn bierman<T: Real, const X: usize>(
     r: T,
 ) -> Option<(SVector<T, X>, T)> {
     let f = u.tr_mul(h);
+    bierman_f(u, d, f, r)
+}
+
+/// [`bierman`] with `f = Uᵀ h` given.
+fn bierman_f<T: Real, const X: usize>(
+    u: &mut SMatrix<T, X, X>,
+    d: &mut SVector<T, X>,
+    f: SVector<T, X>,
+    r: T,
+) -> Option<(SVector<T, X>, T)> {
     let g = f.component_mul(d);
     let mut b = g;
     let mut alpha = r;
@@ -1461,7 +1490,7 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
     u: &mut SMatrix<T, X, X>,
     d: &mut SVector<T, X>,
 ) {
-    u.fill(T::zero());
+    u.as_mut_slice().fill(T::zero());
     for j in (0..X).rev() {
         let (up1, rest1) = w1.split_at_mut(j);
         let (up2, rest2) = w2.split_at_mut(j);
@@ -1506,12 +1535,8 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
             if let Some(x) = u.get_mut((i, j)) {
                 *x = uij;
             }
-            for (a, b) in wi1.iter_mut().zip(wj1.iter()) {
-                *a -= uij * *b;
-            }
-            for (a, b) in wi2.iter_mut().zip(wj2.iter()) {
-                *a -= uij * *b;
-            }
+            axpy(wi1, -uij, wj1);
+            axpy(wi2, -uij, wj2);
         }
     }
 }
@@ -1544,11 +1569,28 @@ fn set_column<T: Real, const R: usize, const C: usize>(
     }
 }
 
-/// `Σ_k a_k b_k` over the shorter of the two slices.
+/// `Σ_k a_k b_k` over the shorter of the two slices, in order.
 fn dot<T: Real>(a: &[T], b: &[T]) -> T {
-    a.iter()
-        .zip(b.iter())
-        .fold(T::zero(), |s, (x, y)| s + *x * *y)
+    crate::linalg::dot_in_order(a, b)
+}
+
+/// `a_k += c b_k` over the shorter of the two slices (four per pass, as [`dot`]).
+fn axpy<T: Real>(a: &mut [T], c: T, b: &[T]) {
+    let n = a.len().min(b.len());
+    let (a, b) = (a.get_mut(..n).unwrap_or(&mut []), b.get(..n).unwrap_or(&[]));
+    let mut ca = a.chunks_exact_mut(4);
+    let mut cb = b.chunks_exact(4);
+    for (x, y) in (&mut ca).zip(&mut cb) {
+        if let ([x0, x1, x2, x3], [y0, y1, y2, y3]) = (x, y) {
+            *x0 += c * *y0;
+            *x1 += c * *y1;
+            *x2 += c * *y2;
+            *x3 += c * *y3;
+        }
+    }
+    for (x, y) in ca.into_remainder().iter_mut().zip(cb.remainder().iter()) {
+        *x += c * *y;
+    }
 }
 
 #[cfg(test)]
