@@ -133,34 +133,35 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
 
     /// `y = J x` (the unfactored matrix; the estimator's products with `∂r/∂q` and `∂r/∂v`).
     pub fn mul_vec(&self, x: &SVector<T, D>, y: &mut SVector<T, D>) {
-        let xs = x.as_slice();
-        for (i, (row, yi)) in self.rows.iter().zip(y.iter_mut()).enumerate() {
-            // Row i holds columns i − BAND ..= i + BAND.
-            let (lo, skip) = match i.checked_sub(BAND) {
-                Some(lo) => (lo, 0),
-                None => (0, BAND - i),
-            };
-            *yi = match (row.get(skip..), xs.get(lo..)) {
-                (Some(r), Some(xw)) => dot_in_order(r, xw),
-                _ => T::zero(),
-            };
-        }
+        self.mul_mat(x, y);
     }
 
-    /// `Y = J X`, column by column the sums of [`BandMatrix::mul_vec`] (each row's window is
-    /// found once for all the columns).
+    /// `Y = J X`: for every column the sums of [`BandMatrix::mul_vec`], in the same order; the
+    /// columns advance together (`X` read by rows), one pass over the band.
     pub fn mul_mat<const K: usize>(&self, x: &SMatrix<T, D, K>, y: &mut SMatrix<T, D, K>) {
+        let mut xr = [[T::zero(); K]; D];
+        for (c, col) in x.as_slice().chunks_exact(D).enumerate() {
+            for (row, v) in xr.iter_mut().zip(col.iter()) {
+                if let Some(r) = row.get_mut(c) {
+                    *r = *v;
+                }
+            }
+        }
         for (i, row) in self.rows.iter().enumerate() {
             let (lo, skip) = match i.checked_sub(BAND) {
                 Some(lo) => (lo, 0),
                 None => (0, BAND - i),
             };
-            let r = row.get(skip..).unwrap_or(&[]);
-            let r = r.get(..D.saturating_sub(lo)).unwrap_or(r);
-            let columns = x.as_slice().chunks_exact(D);
-            for (xc, yc) in columns.zip(y.as_mut_slice().chunks_exact_mut(D)) {
-                if let Some(yi) = yc.get_mut(i) {
-                    *yi = dot_in_order(r, xc.get(lo..).unwrap_or(&[]));
+            let mut s = [T::zero(); K];
+            let (r, xw) = (row.get(skip..).unwrap_or(&[]), xr.get(lo..).unwrap_or(&[]));
+            for (a, xk) in r.iter().zip(xw.iter()) {
+                for (sc, v) in s.iter_mut().zip(xk.iter()) {
+                    *sc += *a * *v;
+                }
+            }
+            for (c, sc) in s.iter().enumerate() {
+                if let Some(yi) = y.get_mut((i, c)) {
+                    *yi = *sc;
                 }
             }
         }

@@ -923,7 +923,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // R_q Φ_i → directions 0..M; R_v Φ_i → M..2M (right-hand sides, negated); the load
         // moves the predictor's positions by the residual static mode Ψ (module doc), so its
         // right-hand side is e_tip − R_q Ψ.
-        let mut y = SVector::<T, D>::zeros();
+        let mut y: SVector<T, D>;
         let mut load_rhs = SVector::<T, D>::zeros();
         for (block, ch) in [
             (0usize, unit(T::one(), T::zero())),
@@ -1256,7 +1256,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                     let ut = u.component_div(&self.scale);
                     let at = a.component_mul(&self.scale);
                     let atf = f.transpose() * at;
-                    f -= ut * atf.transpose() * c;
+                    // f −= (ũ (Fᵀã)ᵀ) c, entry by entry (no temporary matrices).
+                    for (col, bj) in f.as_mut_slice().chunks_exact_mut(X).zip(atf.iter()) {
+                        for (x, ui) in col.iter_mut().zip(ut.iter()) {
+                            *x -= *ui * *bj * c;
+                        }
+                    }
                 };
                 if let Some(imp) = &report.impact {
                     // The relative rate's error reverses like the rate: v ← v − (1 + e) u (a·v),
@@ -1307,9 +1312,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             n1 += 1;
         }
         let ft = f.transpose();
+        self.w1 = [[T::zero(); X]; X];
         for (row, fi) in self.w1.iter_mut().zip(ft.as_slice().chunks_exact(X)) {
             let row = row.get_mut(..n1).unwrap_or(&mut []);
-            row.fill(T::zero());
             for ((fik, uk), fk) in fi.iter().zip(ur.iter()).zip(first.iter()) {
                 if *fik != T::zero() {
                     let (Some(x), Some(y)) = (row.get_mut(*fk..), uk.get(*fk..)) else {
@@ -1491,6 +1496,9 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
     d: &mut SVector<T, X>,
 ) {
     u.as_mut_slice().fill(T::zero());
+    // The weighted row of each step below (its used entries written before they are read).
+    let mut v1 = [T::zero(); X];
+    let mut v2 = [T::zero(); Q];
     for j in (0..X).rev() {
         let (up1, rest1) = w1.split_at_mut(j);
         let (up2, rest2) = w2.split_at_mut(j);
@@ -1507,8 +1515,6 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
         let wj1 = wj1.get(s1..).unwrap_or(&[]);
         // The weighted row `w_jk weight_k`: D_j = Σ_k w_jk² weight_k, and its products with
         // the rows above, divided by D_j, give U's column j.
-        let mut v1 = [T::zero(); X];
-        let mut v2 = [T::zero(); Q];
         for ((v, w), a) in v1.iter_mut().zip(wj1.iter()).zip(d1.iter().skip(s1)) {
             *v = *w * *a;
         }
