@@ -776,7 +776,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             // 1977): an innovation beyond `gate` of its predicted sd — an event the model put
             // elsewhere in time (a landing, an impact), not Gaussian noise — is used with the
             // noise variance that brings it to `gate` sd exactly.
-            let hph = quadratic(&u, &d, row);
+            // `Uᵀ h`, once for the predicted variance and the update.
+            let f = u.tr_mul(row);
+            let hph = quadratic_f(&f, &d);
             let s0 = hph + r;
             let nis = innovation * innovation / s0;
             let gate = self.config.gate;
@@ -799,7 +801,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 r_used = innovation * innovation / (gate * gate) - (s0 - r);
                 *use_k = ReadingUse::Capped;
             }
-            let (gain, _) = bierman(&mut u, &mut d, row, r_used).ok_or(Error::NonFiniteState)?;
+            let (gain, _) = bierman_f(&mut u, &mut d, f, r_used).ok_or(Error::NonFiniteState)?;
             delta += gain * innovation;
             nis_sum += nis;
             nis_count += 1;
@@ -1434,6 +1436,7 @@ fn row_of<T: Real, const X: usize>(u: &SMatrix<T, X, X>, k: usize) -> SVector<T,
 /// `r`: updates `U`, `D` in place and returns the gain `K = P hᵀ / s` and the innovation's
 /// variance `s = h P hᵀ + r`; `None` (factors unchanged in meaning: the caller discards them)
 /// if `s` is not positive and finite.
+#[cfg(test)]
 fn bierman<T: Real, const X: usize>(
     u: &mut SMatrix<T, X, X>,
     d: &mut SVector<T, X>,
