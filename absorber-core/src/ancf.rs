@@ -305,9 +305,12 @@ impl<T: Real> Element<T> {
     /// Axial strain energy `½ ∫ EA ε² dx` \[J\] (5-point Gauss: exact for the degree-8 integrand).
     pub fn axial_energy(&self, u: &ElementVector<T>) -> T {
         let mut e = T::zero();
-        for (xi, w) in GAUSS5 {
-            let (_, eps, _) = self.axial_point(u, lit::<T>(xi));
-            e += lit::<T>(0.5 * w) * self.axial_rigidity * self.length * eps * eps;
+        // The points and half weights converted before the loop (folded to constants: the
+        // loop is not unrolled, and `f64` arithmetic in it is software on an FPv4-SP core).
+        let points = GAUSS5.map(|(xi, w)| (lit::<T>(xi), lit::<T>(0.5 * w)));
+        for (xi, half_w) in points {
+            let (_, eps, _) = self.axial_point(u, xi);
+            e += half_w * self.axial_rigidity * self.length * eps * eps;
         }
         e
     }

@@ -252,8 +252,6 @@ pub struct Ekf<T: Real, S: Scene, const N: usize, const D: usize, const M: usize
     w1: [[T; X]; X],
     w2: [[T; NOISE]; X],
     scratch: BandMatrix<T, D>,
-    /// The same, dense (for the products with the modes).
-    dense: SMatrix<T, D, D>,
     _scene: core::marker::PhantomData<S>,
 }
 
@@ -483,7 +481,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             w1: [[T::zero(); X]; X],
             w2: [[T::zero(); NOISE]; X],
             scratch: BandMatrix::zeros(),
-            dense: SMatrix::zeros(),
             _scene: core::marker::PhantomData,
         }
     }
@@ -779,7 +776,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             // 1977): an innovation beyond `gate` of its predicted sd — an event the model put
             // elsewhere in time (a landing, an impact), not Gaussian noise — is used with the
             // noise variance that brings it to `gate` sd exactly.
-            let hph = quadratic(&u, &d, row);
+            // `Uᵀ h`, once for the predicted variance and the update.
+            let f = u.tr_mul(row);
+            let hph = quadratic_f(&f, &d);
             let s0 = hph + r;
             let nis = innovation * innovation / s0;
             let gate = self.config.gate;
@@ -802,7 +801,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 r_used = innovation * innovation / (gate * gate) - (s0 - r);
                 *use_k = ReadingUse::Capped;
             }
-            let (gain, _) = bierman(&mut u, &mut d, row, r_used).ok_or(Error::NonFiniteState)?;
+            let (gain, _) = bierman_f(&mut u, &mut d, f, r_used).ok_or(Error::NonFiniteState)?;
             delta += gain * innovation;
             nis_sum += nis;
             nis_count += 1;
@@ -814,14 +813,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // The dummy measurement that the load's running mean is zero.
         let mean_sd = self.config.load_mean_sd;
         if is_positive(self.mean_weight) && is_positive(mean_sd) {
-            let mut row = SVector::<T, X>::zeros();
-            row[ld + 2] = T::one();
             let mean_prior = (T::one() - self.mean_weight) * self.load_mean
                 + self.mean_weight
                     * (self.load_map[0][0] * self.load + self.load_map[0][1] * self.load_rate);
-            let innovation = -mean_prior - row.dot(&delta);
+            let innovation = -mean_prior - delta[ld + 2];
+            // The row is the unit vector of the slot: `Uᵀ h` is U's row.
+            let f = row_of(&u, ld + 2);
             let (gain, _) =
-                bierman(&mut u, &mut d, &row, mean_sd * mean_sd).ok_or(Error::NonFiniteState)?;
+                bierman_f(&mut u, &mut d, f, mean_sd * mean_sd).ok_or(Error::NonFiniteState)?;
             delta += gain * innovation;
         }
         // The correction in physical coordinates, onto the model's state at n + 1.
@@ -858,11 +857,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             * self.modulus;
         row[off + SensorKind::RootStrain.index()] = T::zero();
         let stress_var = quadratic(&self.ud_u, &self.ud_d, &row);
-        let load_sd = {
-            let mut e = SVector::<T, X>::zeros();
-            e[ld] = T::one();
-            quadratic(&self.ud_u, &self.ud_d, &e).max(T::zero()).sqrt()
-        };
+        let load_sd = quadratic_f(&row_of(&self.ud_u, ld), &self.ud_d)
+            .max(T::zero())
+            .sqrt();
         // Propagation to the next sample's prior.
         self.propagate(model, ball_free, ball_event, &report);
         self.samples = k_sample;
@@ -943,17 +940,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 &mut r,
                 &mut self.scratch,
             );
-            // All M products at once, dense (one pass over the matrix for M columns: cheaper
-            // than M banded products).
-            self.scratch.write_dense(&mut self.dense);
-            let rphi = self.dense * self.consistent;
+            // The products on the band (the same sums as the dense product, in the same order,
+            // without the terms outside the band, which are exact zeros).
+            let mut rphi = SMatrix::<T, D, M>::zeros();
+            self.scratch.mul_mat(&self.consistent, &mut rphi);
             for i in 0..M {
                 y = -column(&rphi, i);
                 model.work.solve(&mut y)?;
                 set_column(&mut self.dx, block + i, &y);
             }
             if block == 0 {
-                load_rhs = self.dense * self.residual;
+                self.scratch.mul_vec(&self.residual, &mut load_rhs);
             }
         }
         // The load: R_P = −e_tip, so J δx = e_tip − R_q Ψ.
@@ -963,7 +960,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         model.work.solve(&mut y)?;
         set_column(&mut self.dx, 2 * M, &y);
-        self.xi = self.basis.projection * self.dx;
+        // Only the directions' columns (the others are zero and unused).
+        for c in 0..=2 * M {
+            let xi = self.basis.projection * column(&self.dx, c);
+            set_column(&mut self.xi, c, &xi);
+        }
         // The stiff completion for the next step: the out-of-span part of the positions the
         // step gives each direction, `(I − ΦΠ)(b + c_q δx)` (the implicit step moves the stiff
         // coordinates onto their quasi-static response: `c_q J⁻¹ R_q ≈ I` on them, a
@@ -1009,8 +1010,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             }
             row[off + SensorKind::TipAccel.index()] = T::one();
         }
-        // Ball angle: ∇α · δq', δq' = δq* + c_q δx.
-        if matches!(S::BALL, BallKind::Free) {
+        // Ball angle: ∇α · δq', δq' = δq* + c_q δx (only read with the sensor).
+        if matches!(S::BALL, BallKind::Free)
+            && self.config.sensors.get(SensorKind::BallAngle).is_some()
+        {
             let x = Model::<T, S, N, D>::local(&s.q, &s.v, &s.a);
             let grad = tip::gap_gradient(&model.sys.inertia, &x);
             let end = 4 * N - 4;
@@ -1255,7 +1258,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                     let ut = u.component_div(&self.scale);
                     let at = a.component_mul(&self.scale);
                     let atf = f.transpose() * at;
-                    f -= ut * atf.transpose() * c;
+                    // f −= (ũ (Fᵀã)ᵀ) c, entry by entry (no temporary matrices).
+                    for (col, bj) in f.as_mut_slice().chunks_exact_mut(X).zip(atf.iter()) {
+                        for (x, ui) in col.iter_mut().zip(ut.iter()) {
+                            *x -= *ui * *bj * c;
+                        }
+                    }
                 };
                 if let Some(imp) = &report.impact {
                     // The relative rate's error reverses like the rate: v ← v − (1 + e) u (a·v),
@@ -1287,9 +1295,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // in a modal row, at most three in the load's and one in a bias's).
         let mut d1 = [T::zero(); X];
         let mut ur = [[T::zero(); X]; X];
+        // Row k of U is zero left of its diagonal: in the kept columns, before `first[k]`.
+        let mut first = [0usize; X];
         let mut n1 = 0;
         let columns = self.ud_u.as_slice().chunks_exact(X);
-        for (uk, dk) in columns.zip(self.ud_d.iter()) {
+        for ((uk, dk), fk) in columns.zip(self.ud_d.iter()).zip(first.iter_mut()) {
+            *fk = n1;
             if !is_positive(*dk) {
                 continue;
             }
@@ -1303,14 +1314,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             n1 += 1;
         }
         let ft = f.transpose();
+        self.w1 = [[T::zero(); X]; X];
         for (row, fi) in self.w1.iter_mut().zip(ft.as_slice().chunks_exact(X)) {
             let row = row.get_mut(..n1).unwrap_or(&mut []);
-            row.fill(T::zero());
-            for (fik, uk) in fi.iter().zip(ur.iter()) {
+            for ((fik, uk), fk) in fi.iter().zip(ur.iter()).zip(first.iter()) {
                 if *fik != T::zero() {
-                    for (x, y) in row.iter_mut().zip(uk.iter()) {
-                        *x += *fik * *y;
-                    }
+                    let (Some(x), Some(y)) = (row.get_mut(*fk..), uk.get(*fk..)) else {
+                        continue;
+                    };
+                    axpy(x, *fik, y);
                 }
             }
         }
@@ -1400,16 +1412,31 @@ fn quadratic<T: Real, const X: usize>(
     d: &SVector<T, X>,
     h: &SVector<T, X>,
 ) -> T {
-    let f = u.tr_mul(h);
+    quadratic_f(&u.tr_mul(h), d)
+}
+
+/// `Σ_j f_j² d_j` for `f = Uᵀ h` given.
+fn quadratic_f<T: Real, const X: usize>(f: &SVector<T, X>, d: &SVector<T, X>) -> T {
     f.iter()
         .zip(d.iter())
         .fold(T::zero(), |acc, (fi, di)| acc + *fi * *fi * *di)
+}
+
+/// Row `k` of `u` (`Uᵀ e_k`, the same numbers `u.tr_mul` gives for the unit vector: one
+/// nonzero product per entry), read through its storage; zero if `k` is out of range.
+fn row_of<T: Real, const X: usize>(u: &SMatrix<T, X, X>, k: usize) -> SVector<T, X> {
+    let mut f = SVector::<T, X>::zeros();
+    for (fj, col) in f.iter_mut().zip(u.as_slice().chunks_exact(X)) {
+        *fj = col.get(k).copied().unwrap_or(T::zero());
+    }
+    f
 }
 
 /// Bierman's scalar measurement update of `P = U D Uᵀ` for the row `h` and noise variance
 /// `r`: updates `U`, `D` in place and returns the gain `K = P hᵀ / s` and the innovation's
 /// variance `s = h P hᵀ + r`; `None` (factors unchanged in meaning: the caller discards them)
 /// if `s` is not positive and finite.
+#[cfg(test)]
 fn bierman<T: Real, const X: usize>(
     u: &mut SMatrix<T, X, X>,
     d: &mut SVector<T, X>,
@@ -1417,6 +1444,16 @@ fn bierman<T: Real, const X: usize>(
     r: T,
 ) -> Option<(SVector<T, X>, T)> {
     let f = u.tr_mul(h);
+    bierman_f(u, d, f, r)
+}
+
+/// [`bierman`] with `f = Uᵀ h` given.
+fn bierman_f<T: Real, const X: usize>(
+    u: &mut SMatrix<T, X, X>,
+    d: &mut SVector<T, X>,
+    f: SVector<T, X>,
+    r: T,
+) -> Option<(SVector<T, X>, T)> {
     let g = f.component_mul(d);
     let mut b = g;
     let mut alpha = r;
@@ -1461,7 +1498,10 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
     u: &mut SMatrix<T, X, X>,
     d: &mut SVector<T, X>,
 ) {
-    u.fill(T::zero());
+    u.as_mut_slice().fill(T::zero());
+    // The weighted row of each step below (its used entries written before they are read).
+    let mut v1 = [T::zero(); X];
+    let mut v2 = [T::zero(); Q];
     for j in (0..X).rev() {
         let (up1, rest1) = w1.split_at_mut(j);
         let (up2, rest2) = w2.split_at_mut(j);
@@ -1478,8 +1518,6 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
         let wj1 = wj1.get(s1..).unwrap_or(&[]);
         // The weighted row `w_jk weight_k`: D_j = Σ_k w_jk² weight_k, and its products with
         // the rows above, divided by D_j, give U's column j.
-        let mut v1 = [T::zero(); X];
-        let mut v2 = [T::zero(); Q];
         for ((v, w), a) in v1.iter_mut().zip(wj1.iter()).zip(d1.iter().skip(s1)) {
             *v = *w * *a;
         }
@@ -1506,12 +1544,8 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
             if let Some(x) = u.get_mut((i, j)) {
                 *x = uij;
             }
-            for (a, b) in wi1.iter_mut().zip(wj1.iter()) {
-                *a -= uij * *b;
-            }
-            for (a, b) in wi2.iter_mut().zip(wj2.iter()) {
-                *a -= uij * *b;
-            }
+            axpy(wi1, -uij, wj1);
+            axpy(wi2, -uij, wj2);
         }
     }
 }
@@ -1544,11 +1578,28 @@ fn set_column<T: Real, const R: usize, const C: usize>(
     }
 }
 
-/// `Σ_k a_k b_k` over the shorter of the two slices.
+/// `Σ_k a_k b_k` over the shorter of the two slices, in order.
 fn dot<T: Real>(a: &[T], b: &[T]) -> T {
-    a.iter()
-        .zip(b.iter())
-        .fold(T::zero(), |s, (x, y)| s + *x * *y)
+    crate::linalg::dot_in_order(a, b)
+}
+
+/// `a_k += c b_k` over the shorter of the two slices (four per pass, as [`dot`]).
+fn axpy<T: Real>(a: &mut [T], c: T, b: &[T]) {
+    let n = a.len().min(b.len());
+    let (a, b) = (a.get_mut(..n).unwrap_or(&mut []), b.get(..n).unwrap_or(&[]));
+    let mut ca = a.chunks_exact_mut(4);
+    let mut cb = b.chunks_exact(4);
+    for (x, y) in (&mut ca).zip(&mut cb) {
+        if let ([x0, x1, x2, x3], [y0, y1, y2, y3]) = (x, y) {
+            *x0 += c * *y0;
+            *x1 += c * *y1;
+            *x2 += c * *y2;
+            *x3 += c * *y3;
+        }
+    }
+    for (x, y) in ca.into_remainder().iter_mut().zip(cb.remainder().iter()) {
+        *x += c * *y;
+    }
 }
 
 #[cfg(test)]
