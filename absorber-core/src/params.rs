@@ -698,7 +698,8 @@ mod tests {
     /// A rejected parameter's value is the one that was set, NaN and counts included.
     #[test]
     fn value_of_a_rejected_field_is_the_value_set() {
-        let cases: [(fn(&mut Params<f32>), f32); 6] = [
+        type Set = fn(&mut Params<f32>);
+        let cases: [(Set, f32); 6] = [
             (|p| p.beam.modulus = -2.5e9, -2.5e9),
             (
                 |p| {

@@ -76,6 +76,8 @@ mod tests {
     use crate::full::SceneKind;
     use crate::sim::Simulator;
     use absorber_core::{ArmParams, Params};
+    use rand::rngs::ChaCha8Rng;
+    use rand::{RngExt, SeedableRng};
 
     /// The shipped mast arm's parameters and arm (N = 3).
     fn mast_arm() -> (Params<f64>, ArmParams<f64>) {
@@ -85,17 +87,10 @@ mod tests {
         (sc.params().unwrap(), arm)
     }
 
-    /// A deterministic pseudo-random sequence in [−1, 1).
+    /// A deterministic pseudo-random sequence in [−1, 1) (ChaCha8).
     fn noise(n: usize, seed: u64) -> Vec<f64> {
-        let mut x = seed;
-        (0..n)
-            .map(|_| {
-                x ^= x << 13;
-                x ^= x >> 7;
-                x ^= x << 17;
-                (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-            })
-            .collect()
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..n).map(|_| rng.random_range(-1.0..1.0)).collect()
     }
 
     /// Rigid vertical translation (`uy = 1` at every node) and the small rigid rotation about
