@@ -6,11 +6,13 @@ use core::fmt;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum Error {
-    /// A parameter is out of range; `field` names it as in [`crate::Params`].
+    /// A parameter is out of range; `field` names it as in [`crate::Params`]. Its value is
+    /// [`crate::Params::value_of`]`(field)` of the parameters that were checked (the error
+    /// stays two static strings: no number to format on a target without a formatter).
     InvalidParameter {
         /// Dotted path of the field, e.g. `"beam.modulus"`.
         field: &'static str,
-        /// Why it was rejected.
+        /// Why it was rejected: the allowed range or the rule.
         reason: &'static str,
     },
     /// The step input (base acceleration) is NaN or infinite. The state is unchanged.

@@ -577,6 +577,59 @@ impl<T: Real> Params<T> {
     }
 }
 
+impl<T: Real> Params<T> {
+    /// The value of the numeric field named `field` (its dotted name, as
+    /// [`Error::InvalidParameter`] and the scene files spell it: `"beam.modulus"`), so that an
+    /// error can be reported with the key, its value and the allowed range without the error
+    /// carrying a number; `None` for a name that is no numeric field of `Params` (`"elements"`,
+    /// `"loads"`, an enumeration). Counts come as scalars ([`Real::from_count`]).
+    pub fn value_of(&self, field: &str) -> Option<T> {
+        let (b, t, bl, i, c) = (
+            &self.beam,
+            &self.tip,
+            &self.ball,
+            &self.integrator,
+            &self.calibration,
+        );
+        Some(match field {
+            "beam.length" => b.length,
+            "beam.mass" => b.mass,
+            "beam.area" => b.area,
+            "beam.modulus" => b.modulus,
+            "beam.inertia" => b.inertia,
+            "tip.mass" => t.mass,
+            "tip.inertia" => t.inertia,
+            "tip.offset" => t.offset,
+            "ball.mass" => bl.mass,
+            "ball.inertia" => bl.inertia,
+            "ball.radius" => bl.radius,
+            "ball.track_radius" => bl.track_radius,
+            "ball.stop_angle" => bl.stop_angle,
+            "ball.restitution" => bl.restitution,
+            "ball.landing_restitution" => bl.landing_restitution,
+            "ball.stick_speed" => bl.stick_speed,
+            "ball.stop_contact_time" => bl.stop_contact_time,
+            "ball.min_bounce_time" => bl.min_bounce_time,
+            "ball.lift_height" => bl.lift_height,
+            "ball.initial_angle" => bl.initial_angle,
+            "integrator.alpha_f" => i.alpha_f,
+            "integrator.alpha_m" => i.alpha_m,
+            "integrator.gamma" => i.gamma,
+            "integrator.beta" => i.beta,
+            "integrator.step" => i.step,
+            "integrator.tolerance" => i.tolerance,
+            "integrator.max_iterations" => T::from_count(u64::from(i.max_iterations)),
+            "integrator.max_work" => T::from_count(u64::from(i.max_work)),
+            "damping.stiffness_proportional" => self.damping.stiffness_proportional,
+            "gravity" => self.gravity,
+            "calibration.bending_stiffness" => c.bending_stiffness,
+            "calibration.axial_stiffness" => c.axial_stiffness,
+            "calibration.mass_lumping" => c.mass_lumping,
+            _ => return None,
+        })
+    }
+}
+
 impl<T: Real> Calibration<T> {
     /// Checks the factors; the error names the first bad field. The ranges are what a
     /// calibration of a discretization may do, not a different beam: E·I within a factor of 2,
@@ -606,5 +659,68 @@ impl<T: Real> Calibration<T> {
             });
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every field name the checks of this file can report has its value in
+    /// [`Params::value_of`] (the names are read from the checks' source, so a new check with a
+    /// name missing from the table fails here).
+    #[test]
+    fn every_checked_field_has_its_value() {
+        let src = include_str!("params.rs");
+        let checks = &src[..src
+            .find("impl<T: Real> Params<T> {\n    /// The value of")
+            .unwrap()];
+        let p = Params::<f64>::default();
+        let mut names = 0;
+        for (i, _) in checks.match_indices('"') {
+            let rest = &checks[i + 1..];
+            let Some(end) = rest.find('"') else { break };
+            let name = &rest[..end];
+            let before = checks[..i].trim_end();
+            let is_field = before.ends_with("field:") || rest[end + 1..].starts_with(')');
+            if is_field && name.contains('.') || name == "gravity" {
+                assert!(
+                    p.value_of(name).is_some(),
+                    "`{name}` has no value in `value_of`"
+                );
+                names += 1;
+            }
+        }
+        assert!(names >= 33, "{names} names found");
+        assert_eq!(p.value_of("elements"), None);
+    }
+
+    /// A rejected parameter's value is the one that was set, NaN and counts included.
+    #[test]
+    fn value_of_a_rejected_field_is_the_value_set() {
+        type Set = fn(&mut Params<f32>);
+        let cases: [(Set, f32); 6] = [
+            (|p| p.beam.modulus = -2.5e9, -2.5e9),
+            (
+                |p| {
+                    p.ball.radius = 0.02;
+                    p.ball.track_radius = 0.01;
+                },
+                0.01,
+            ),
+            (|p| p.ball.initial_angle = 3.0, 3.0),
+            (|p| p.integrator.tolerance = 1e-9, 1e-9),
+            (|p| p.integrator.max_iterations = 0, 0.0),
+            (|p| p.gravity = f32::NAN, f32::NAN),
+        ];
+        for (set, value) in cases {
+            let mut p = Params::<f32>::default();
+            set(&mut p);
+            let Err(Error::InvalidParameter { field, .. }) = p.validate(true, true) else {
+                panic!("accepted: {value}");
+            };
+            let v = p.value_of(field).unwrap();
+            assert!(v == value || v.is_nan() && value.is_nan(), "{field}: {v}");
+        }
     }
 }

@@ -14,9 +14,10 @@
 #include <stdint.h>
 
 /**
- * Version of this API (major × 10000 + minor × 100 + patch).
+ * Version of this API (major × 10000 + minor × 100 + patch). 0.2.0: [`AbsorberError`] carries
+ * the value of the bad field (a larger struct: callers rebuild against this header).
  */
-#define ABSORBER_API_VERSION 100
+#define ABSORBER_API_VERSION 200
 
 /**
  * Paper scene, free ball with stops, N = 3, `float`.
@@ -197,7 +198,8 @@ typedef enum AbsorberStatus {
      */
     ABSORBER_STATUS_OK = 0,
     /**
-     * A parameter is out of range; [`AbsorberError::field`] names it.
+     * A parameter is out of range; [`AbsorberError::field`] names it, `value` gives its value
+     * and `reason` the allowed range.
      */
     ABSORBER_STATUS_INVALID_PARAMETER = 1,
     /**
@@ -503,9 +505,21 @@ typedef struct AbsorberError {
      */
     char field[ABSORBER_FIELD_LEN];
     /**
-     * Why, in words, NUL-terminated (may be truncated).
+     * Why, in words, NUL-terminated (may be truncated): the allowed range or the rule.
      */
     char reason[ABSORBER_REASON_LEN];
+    /**
+     * The value given for [`AbsorberError::field`], as the caller passed it (a parameter's
+     * `double` before a `float` variant rounds it, or the number of an enumeration, flag,
+     * size or count) when [`AbsorberError::has_value`] is 1; NaN otherwise. A number, not
+     * text: the library formats no floats.
+     */
+    double value;
+    /**
+     * 1 if [`AbsorberError::value`] holds the field's value, 0 if the error is not about one
+     * numeric field.
+     */
+    uint8_t has_value;
 } AbsorberError;
 
 /**
@@ -1324,7 +1338,8 @@ size_t absorber_model_size(uint32_t variant);
  *
  * On failure nothing is written to `*model`; if `error` is not NULL it receives the status,
  * the bad field's dotted name (`"beam.modulus"`, `"integrator.step"`, `"size"`,
- * `"storage_size"`, `"variant"`) and the reason. The storage may have been overwritten.
+ * `"storage_size"`, `"variant"`), the value given for it (`value`, with `has_value` = 1) and the
+ * reason (the allowed range). The storage may have been overwritten.
  *
  * # Safety
  * `storage` is valid for writes of `storage_size` bytes and not used otherwise while the model

@@ -47,9 +47,11 @@
 //!   instead of being read past its struct.
 //! * **Errors are values.** Every function returns an [`AbsorberStatus`]. [`absorber_init`]
 //!   validates the parameters with the core's `Params::validate` and, on a bad one, writes the
-//!   dotted name of the field (`"beam.modulus"`, as in the core and the scene files) and the
-//!   reason into an [`AbsorberError`] (NUL-terminated `char` arrays: no pointer into the
-//!   library, no lifetime to manage). A failed step leaves the state exactly as it was.
+//!   dotted name of the field (`"beam.modulus"`, as in the core and the scene files), the
+//!   reason with the allowed range (NUL-terminated `char` arrays: no pointer into the library,
+//!   no lifetime to manage) and the value given for the field, as a `double` (`value`, valid
+//!   when `has_value` is 1: the library formats no floats) into an [`AbsorberError`]. A failed
+//!   step leaves the state exactly as it was.
 //! * **No panic.** No function unwraps or indexes unchecked; the `#[panic_handler]` of the
 //!   bare-metal build only exists because a `no_std` static library must have one (it traps
 //!   with `udf`).
@@ -67,7 +69,7 @@
 //! AbsorberError err;
 //! if (absorber_init(storage, sizeof storage, ABSORBER_VARIANT_FREE_N3_F32, &p, 0.0, &m, &err)
 //!         != ABSORBER_STATUS_OK) {
-//!     printf("bad parameter %s: %s\n", err.field, err.reason);
+//!     printf("bad parameter %s = %g: %s\n", err.field, err.value, err.reason);
 //! }
 //! for (;;) {
 //!     float base_accel = read_accelerometer();  /* m/s², positive up, gravity removed */
@@ -119,8 +121,9 @@ use variants::*;
 // ---------------------------------------------------------------------------------------------
 // Constants of the header
 
-/// Version of this API (major × 10000 + minor × 100 + patch).
-pub const ABSORBER_API_VERSION: u32 = 100;
+/// Version of this API (major × 10000 + minor × 100 + patch). 0.2.0: [`AbsorberError`] carries
+/// the value of the bad field (a larger struct: callers rebuild against this header).
+pub const ABSORBER_API_VERSION: u32 = 200;
 
 /// Paper scene, free ball with stops, N = 3, `float`.
 pub const ABSORBER_VARIANT_FREE_N3_F32: u32 = 1;

@@ -135,7 +135,8 @@ pub extern "C" fn absorber_model_size(variant: u32) -> usize {
 ///
 /// On failure nothing is written to `*model`; if `error` is not NULL it receives the status,
 /// the bad field's dotted name (`"beam.modulus"`, `"integrator.step"`, `"size"`,
-/// `"storage_size"`, `"variant"`) and the reason. The storage may have been overwritten.
+/// `"storage_size"`, `"variant"`), the value given for it (`value`, with `has_value` = 1) and the
+/// reason (the allowed range). The storage may have been overwritten.
 ///
 /// # Safety
 /// `storage` is valid for writes of `storage_size` bytes and not used otherwise while the model
@@ -167,11 +168,12 @@ pub unsafe extern "C" fn absorber_init(
         // Read the size first: an older caller's struct may be shorter than ours.
         let size = params.cast::<u32>().read();
         if size as usize != size_of::<AbsorberParams>() {
-            return fail(
+            return fail_with(
                 error,
                 AbsorberStatus::InvalidParameter,
                 "size",
                 "is not sizeof(AbsorberParams) of this library: fill the struct with absorber_params_default()",
+                Some(f64::from(size)),
             );
         }
         let p = &*params;
@@ -197,11 +199,12 @@ pub unsafe extern "C" fn absorber_init(
             ABSORBER_VARIANT_FREE_N3_F64 => {
                 build::<f64, absorber_core::FreeBall, 3, 13>(storage, s, t, p, a, m, e)
             }
-            _ => fail(
+            _ => fail_with(
                 error,
                 AbsorberStatus::Variant,
                 "variant",
                 "is not an ABSORBER_VARIANT_* compiled into this library",
+                Some(f64::from(variant)),
             ),
         }
     }

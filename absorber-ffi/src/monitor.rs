@@ -65,6 +65,23 @@ pub(crate) fn monitor_config<T: Real>(
     Ok(m)
 }
 
+/// The value given for the field named `field` of a monitor's configuration `c` (`None` for
+/// the model's `beam.*`, which its own construction already checked).
+#[cold]
+#[inline(never)]
+fn monitor_value(c: &AbsorberMonitorConfig, field: &str) -> Option<f64> {
+    let code = |x: u32| Some(f64::from(x));
+    match field {
+        "monitor.size" => code(c.size),
+        "monitor.detail_category" => code(c.detail_category),
+        "monitor.threshold_rule" => code(c.threshold_rule),
+        "monitor.block" => code(c.block),
+        "monitor.gate" => Some(c.gate),
+        "monitor.extreme_fibre" => Some(c.extreme_fibre),
+        _ => None,
+    }
+}
+
 /// Builds a monitor.
 ///
 /// # Safety
@@ -80,11 +97,12 @@ pub(crate) unsafe fn monitor_init<T: Scalar>(
     // SAFETY (all calls): pointers forwarded from the caller.
     unsafe {
         if storage_size < size_of::<Slot<Monitor<T>>>() {
-            return fail(
+            return fail_with(
                 error,
                 AbsorberStatus::Storage,
                 "storage_size",
                 "is smaller than ABSORBER_MONITOR_SIZE_F32/_F64",
+                Some(storage_size as f64),
             );
         }
         let slot = storage.cast::<Slot<Monitor<T>>>();
@@ -96,7 +114,7 @@ pub(crate) unsafe fn monitor_init<T: Scalar>(
         if let Err(e) =
             monitor_config(config, model.params()).and_then(|c| model.new_monitor_in(value, c))
         {
-            return fail_core(error, &e);
+            return fail_core(error, &e, |f| monitor_value(config, f));
         }
         core::ptr::addr_of_mut!((*slot).tag).write(T::MONITOR_TAG);
         core::ptr::addr_of_mut!((*slot).magic).write(MONITOR_MAGIC);
@@ -147,12 +165,14 @@ pub unsafe extern "C" fn absorber_monitor_init(
         if config.is_null() {
             absorber_monitor_config_default(&mut c);
         } else {
-            if config.cast::<u32>().read() as usize != size_of::<AbsorberMonitorConfig>() {
-                return fail(
+            let size = config.cast::<u32>().read();
+            if size as usize != size_of::<AbsorberMonitorConfig>() {
+                return fail_with(
                     error,
                     AbsorberStatus::InvalidParameter,
                     "monitor.size",
                     "is not sizeof(AbsorberMonitorConfig): fill it with absorber_monitor_config_default()",
+                    Some(f64::from(size)),
                 );
             }
             c = *config;

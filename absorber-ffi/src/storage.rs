@@ -306,11 +306,28 @@ pub(crate) unsafe fn fail(
     field: &str,
     reason: &str,
 ) -> AbsorberStatus {
+    // SAFETY: forwarded.
+    unsafe { fail_with(error, status, field, reason, None) }
+}
+
+/// [`fail`] with the value given for `field` (`None`: not about one numeric field).
+///
+/// # Safety
+/// `error` is NULL or valid for writes.
+pub(crate) unsafe fn fail_with(
+    error: *mut AbsorberError,
+    status: AbsorberStatus,
+    field: &str,
+    reason: &str,
+    value: Option<f64>,
+) -> AbsorberStatus {
     if !error.is_null() {
         let mut e = AbsorberError {
             status,
             field: [0; ABSORBER_FIELD_LEN],
             reason: [0; ABSORBER_REASON_LEN],
+            value: value.unwrap_or(f64::NAN),
+            has_value: u8::from(value.is_some()),
         };
         copy_str(&mut e.field, field);
         copy_str(&mut e.reason, reason);
@@ -320,11 +337,16 @@ pub(crate) unsafe fn fail(
     status
 }
 
-/// Writes the details of a core error.
+/// Writes the details of a core error; `value_of` gives the value of the field an
+/// [`Error::InvalidParameter`] names.
 ///
 /// # Safety
 /// `error` is NULL or valid for writes.
-pub(crate) unsafe fn fail_core(error: *mut AbsorberError, e: &Error) -> AbsorberStatus {
+pub(crate) unsafe fn fail_core(
+    error: *mut AbsorberError,
+    e: &Error,
+    value_of: impl FnOnce(&str) -> Option<f64>,
+) -> AbsorberStatus {
     let (field, reason) = match e {
         Error::InvalidParameter { field, reason } => (*field, *reason),
         Error::NonFiniteInput => ("", "base acceleration is not finite"),
@@ -335,8 +357,34 @@ pub(crate) unsafe fn fail_core(error: *mut AbsorberError, e: &Error) -> Absorber
         Error::WorkCap => ("", "the step's work cap was reached"),
         _ => ("", "error"),
     };
+    let value = if field.is_empty() {
+        None
+    } else {
+        value_of(field)
+    };
     // SAFETY: forwarded from the caller.
-    unsafe { fail(error, status_of(e), field, reason) }
+    unsafe { fail_with(error, status_of(e), field, reason, value) }
+}
+
+/// The value the caller gave in `p` for the field named `field`: the `double` as passed (the
+/// core's [`Params::value_of`] of the parameters read in `f64`, where `lit` is exact), or the
+/// number of an enumeration, flag or size. `None` for a name that is none of `p`'s numbers.
+/// Cold and never inlined: its `f64` parameters are on the stack of a failed call only, not in
+/// the frame of every `absorber_init` (the boot stack the firmware budgets).
+#[cold]
+#[inline(never)]
+pub(crate) fn param_value(p: &AbsorberParams, field: &str) -> Option<f64> {
+    let code = |x: u32| Some(f64::from(x));
+    match field {
+        "size" => code(p.size),
+        "ball.impact_model" => code(p.ball.impact_model),
+        "integrator.newton" => code(p.integrator.newton),
+        "integrator.accept_after_budget" => code(u32::from(p.integrator.accept_after_budget)),
+        "integrator.events" => code(p.integrator.events),
+        "flight" => code(p.flight),
+        "at_cap" => code(p.at_cap),
+        _ => to_params::<f64>(p).ok()?.value_of(field),
+    }
 }
 
 pub(crate) fn invalid(field: &'static str, reason: &'static str) -> Error {
@@ -454,18 +502,19 @@ pub(crate) unsafe fn build<T: Real, S: Scene, const N: usize, const D: usize>(
     if size < size_of::<Slot<Model<T, S, N, D>>>() {
         // SAFETY: forwarded.
         return unsafe {
-            fail(
+            fail_with(
                 error,
                 AbsorberStatus::Storage,
                 "storage_size",
                 "is smaller than ABSORBER_MODEL_SIZE_<VARIANT>",
+                Some(size as f64),
             )
         };
     }
     let p = match to_params::<T>(params) {
         Ok(p) => p,
         // SAFETY: forwarded.
-        Err(e) => return unsafe { fail_core(error, &e) },
+        Err(e) => return unsafe { fail_core(error, &e, |f| param_value(params, f)) },
     };
     let slot = storage.cast::<Slot<Model<T, S, N, D>>>();
     // SAFETY: the storage is large enough (checked) and aligned (checked by the caller); any
@@ -477,7 +526,7 @@ pub(crate) unsafe fn build<T: Real, S: Scene, const N: usize, const D: usize>(
         let value =
             &mut *core::ptr::addr_of_mut!((*slot).value).cast::<MaybeUninit<Model<T, S, N, D>>>();
         if let Err(e) = Model::<T, S, N, D>::at_rest_in(value, p, lit(base_accel)) {
-            return fail_core(error, &e);
+            return fail_core(error, &e, |f| param_value(params, f));
         }
         core::ptr::addr_of_mut!((*slot).tag).write(tag);
         core::ptr::addr_of_mut!((*slot).magic).write(MODEL_MAGIC);

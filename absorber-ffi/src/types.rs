@@ -9,7 +9,8 @@ use super::*;
 pub enum AbsorberStatus {
     /// Success.
     Ok = 0,
-    /// A parameter is out of range; [`AbsorberError::field`] names it.
+    /// A parameter is out of range; [`AbsorberError::field`] names it, `value` gives its value
+    /// and `reason` the allowed range.
     InvalidParameter = 1,
     /// The base acceleration (or another number passed in) is NaN or infinite; state unchanged,
     /// nothing written.
@@ -49,8 +50,16 @@ pub struct AbsorberError {
     /// Dotted name of the bad field (`"beam.modulus"`, `"size"`), NUL-terminated; empty if the
     /// error is not about one field.
     pub field: [c_char; ABSORBER_FIELD_LEN],
-    /// Why, in words, NUL-terminated (may be truncated).
+    /// Why, in words, NUL-terminated (may be truncated): the allowed range or the rule.
     pub reason: [c_char; ABSORBER_REASON_LEN],
+    /// The value given for [`AbsorberError::field`], as the caller passed it (a parameter's
+    /// `double` before a `float` variant rounds it, or the number of an enumeration, flag,
+    /// size or count) when [`AbsorberError::has_value`] is 1; NaN otherwise. A number, not
+    /// text: the library formats no floats.
+    pub value: f64,
+    /// 1 if [`AbsorberError::value`] holds the field's value, 0 if the error is not about one
+    /// numeric field.
+    pub has_value: u8,
 }
 
 /// The flexible cantilever (paper Table 1).

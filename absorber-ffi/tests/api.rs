@@ -45,6 +45,17 @@ fn firmware() -> AbsorberParams {
     p
 }
 
+/// An error struct with every field set to what no failure writes.
+fn blank() -> AbsorberError {
+    AbsorberError {
+        status: AbsorberStatus::Ok,
+        field: [1; ABSORBER_FIELD_LEN],
+        reason: [1; ABSORBER_REASON_LEN],
+        value: 0.5,
+        has_value: 7,
+    }
+}
+
 /// Builds `variant` in `st`; returns the status, the handle and the error.
 fn init<const B: usize>(
     st: &mut Storage<B>,
@@ -52,11 +63,7 @@ fn init<const B: usize>(
     p: &AbsorberParams,
 ) -> (AbsorberStatus, *mut AbsorberModel, AbsorberError) {
     let mut m = null_mut();
-    let mut e = AbsorberError {
-        status: AbsorberStatus::Ok,
-        field: [0; ABSORBER_FIELD_LEN],
-        reason: [0; ABSORBER_REASON_LEN],
-    };
+    let mut e = blank();
     // SAFETY: storage of B bytes, aligned to 8; all pointers valid.
     let s = unsafe {
         absorber_init(
@@ -344,8 +351,13 @@ fn calibration_and_generalized_alpha_reach_the_core() {
     assert_eq!(text(&e.field), "calibration.axial_stiffness");
 }
 
+/// The value an error reports: `(has_value, value)` with the value's bits (NaN compares).
+fn value(e: &AbsorberError) -> (u8, u64) {
+    (e.has_value, e.value.to_bits())
+}
+
 #[test]
-fn a_bad_parameter_is_refused_with_the_name_of_its_field() {
+fn a_bad_parameter_is_refused_with_the_name_of_its_field_and_its_value() {
     let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
     let mut p = defaults();
     p.beam.modulus = -200e9;
@@ -355,26 +367,45 @@ fn a_bad_parameter_is_refused_with_the_name_of_its_field() {
     assert_eq!(e.status, AbsorberStatus::InvalidParameter);
     assert_eq!(text(&e.field), "beam.modulus");
     assert_eq!(text(&e.reason), "must be positive");
+    assert_eq!(value(&e), (1, (-200e9f64).to_bits()));
     let mut p = defaults();
     p.integrator.step = f64::NAN;
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "integrator.step");
+    assert_eq!(value(&e), (1, f64::NAN.to_bits()));
+    // The value as given, not as the `float` variant rounds it (1e-7 is no f32).
+    let mut p = defaults();
+    p.integrator.tolerance = 1e-7;
+    let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
+    assert_eq!(text(&e.field), "integrator.tolerance");
+    assert_eq!(value(&e), (1, 1e-7f64.to_bits()));
+    // A rule between two fields: the named field's value.
+    let mut p = defaults();
+    p.ball.track_radius = 0.5 * p.ball.radius;
+    let mut sd = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F64>();
+    let (_, _, e) = init(&mut sd, ABSORBER_VARIANT_FREE_N3_F64, &p);
+    assert_eq!(text(&e.field), "ball.track_radius");
+    assert_eq!(value(&e), (1, p.ball.track_radius.to_bits()));
     let mut p = defaults();
     p.ball.impact_model = 7;
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "ball.impact_model");
+    assert_eq!(value(&e), (1, 7.0f64.to_bits()));
     let mut p = defaults();
     p.integrator.events = 2;
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "integrator.events");
+    assert_eq!(value(&e), (1, 2.0f64.to_bits()));
     let mut p = defaults();
     p.max_work = 10;
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "integrator.max_work");
+    assert_eq!(value(&e), (1, 10.0f64.to_bits()));
     let mut p = defaults();
     p.at_cap = 2;
     let (_, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(text(&e.field), "at_cap");
+    assert_eq!(value(&e), (1, 2.0f64.to_bits()));
     // The beam-only scene does not validate the ball (as the core).
     let mut p = defaults();
     p.ball.mass = -1.0;
@@ -428,13 +459,16 @@ fn a_struct_of_another_size_storage_too_small_and_unknown_variants_are_refused()
     let (s, _, e) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &p);
     assert_eq!(s, AbsorberStatus::InvalidParameter);
     assert_eq!(text(&e.field), "size");
+    assert_eq!(value(&e), (1, f64::from(p.size).to_bits()));
     let mut small = storage::<1024>();
     let (s, _, e) = init(&mut small, ABSORBER_VARIANT_FREE_N3_F32, &defaults());
     assert_eq!(s, AbsorberStatus::Storage);
     assert_eq!(text(&e.field), "storage_size");
+    assert_eq!(value(&e), (1, 1024.0f64.to_bits()));
     let (s, _, e) = init(&mut st, 99, &defaults());
     assert_eq!(s, AbsorberStatus::Variant);
     assert_eq!(text(&e.field), "variant");
+    assert_eq!(value(&e), (1, 99.0f64.to_bits()));
     // Misaligned storage.
     let mut big = storage::<{ ABSORBER_MODEL_SIZE_FREE_N3_F32 + 8 }>();
     let mut m = null_mut();
@@ -556,4 +590,63 @@ fn out_of_range_statuses_and_non_finite_numbers_are_defined() {
             assert_eq!(e, good, "nothing written");
         }
     }
+}
+
+/// A monitor's bad configuration is reported with its value too; an error about no one
+/// number has none.
+#[test]
+fn monitor_errors_carry_the_value_and_other_errors_none() {
+    let mut st = storage::<ABSORBER_MODEL_SIZE_FREE_N3_F32>();
+    let (s, m, _) = init(&mut st, ABSORBER_VARIANT_FREE_N3_F32, &firmware());
+    assert_eq!(s, AbsorberStatus::Ok);
+    let mut ms = storage::<ABSORBER_MONITOR_SIZE_F32>();
+    let monitor = |c: &AbsorberMonitorConfig, ms: &mut Storage<ABSORBER_MONITOR_SIZE_F32>| {
+        let (mut mon, mut e) = (null_mut(), blank());
+        // SAFETY: storage of the documented size, live model, valid config and outputs.
+        let s = unsafe {
+            absorber_monitor_init(
+                ms.0.as_mut_ptr().cast(),
+                ABSORBER_MONITOR_SIZE_F32,
+                m,
+                c,
+                &mut mon,
+                &mut e,
+            )
+        };
+        (s, e)
+    };
+    let mut c = core::mem::MaybeUninit::<AbsorberMonitorConfig>::uninit();
+    // SAFETY: valid for a write, then written.
+    let c = unsafe {
+        absorber_monitor_config_default(c.as_mut_ptr());
+        c.assume_init()
+    };
+    let (s, e) = monitor(&AbsorberMonitorConfig { block: 0, ..c }, &mut ms);
+    assert_eq!(s, AbsorberStatus::InvalidParameter);
+    assert_eq!(text(&e.field), "monitor.block");
+    assert_eq!(value(&e), (1, 0.0f64.to_bits()));
+    let (_, e) = monitor(&AbsorberMonitorConfig { gate: -0.25, ..c }, &mut ms);
+    assert_eq!(text(&e.field), "monitor.gate");
+    assert_eq!(value(&e), (1, (-0.25f64).to_bits()));
+    let (s, e) = monitor(&c, &mut ms);
+    assert_eq!(s, AbsorberStatus::Ok, "{}", text(&e.field));
+    // NULL storage: no field, no value.
+    let mut e = blank();
+    let mut h = null_mut();
+    // SAFETY: NULL storage is refused before anything is read.
+    let s = unsafe {
+        absorber_init(
+            core::ptr::null_mut(),
+            0,
+            ABSORBER_VARIANT_FREE_N3_F32,
+            &defaults(),
+            0.0,
+            &mut h,
+            &mut e,
+        )
+    };
+    assert_eq!(s, AbsorberStatus::NullPointer);
+    assert_eq!(text(&e.field), "");
+    assert_eq!(e.has_value, 0);
+    assert!(e.value.is_nan());
 }

@@ -8,7 +8,8 @@
  * with the on-device monitor recording after every step, as fw-free-monitor does. The Rust
  * fingerprints are passed on the command line (expect=0x... expect-monitor=0x...): the exit code
  * is 0 only if both are reproduced bit for bit (1 on a mismatch, 2 without references, 3 if the
- * model cannot start). scripts/c-example.sh builds and checks it.
+ * model cannot start, 4 if a bad parameter is not refused with its value).
+ * scripts/c-example.sh builds and checks it.
  */
 #include <stddef.h>
 #include <stdint.h>
@@ -220,6 +221,28 @@ static void report(const char *what, struct summary s)
     flush();
 }
 
+/* A bad parameter is refused with its name, the allowed range and the value given, as a double
+   (the library formats no floats): here a negative Young's modulus. A function of its own, so
+   that its copy of the parameters is not in main's frame during the boot-stack measurement. */
+static __attribute__((noinline)) int bad_parameter_is_reported(const AbsorberParams *p)
+{
+    AbsorberParams bad = *p;
+    bad.beam.modulus = -2.0e11;
+    AbsorberModel *m;
+    AbsorberError err;
+    const AbsorberStatus s = absorber_init(model_storage, sizeof model_storage,
+                                           ABSORBER_VARIANT_FREE_N3_F32, &bad, 0.0, &m, &err);
+    const int ok = s == ABSORBER_STATUS_INVALID_PARAMETER && err.has_value == 1 &&
+                   err.value == -2.0e11;
+    put("bad parameter: ");
+    put(err.field);
+    put(" ");
+    put(err.reason);
+    put(ok ? ", value -2e11 reported" : ", WRONG value or status");
+    flush();
+    return ok;
+}
+
 int main(void)
 {
     static char cmdline[256];
@@ -282,6 +305,8 @@ int main(void)
     put("monitor_state_hash=");
     put_hex(monitored.hash, 16);
     flush();
+
+    if (!bad_parameter_is_reported(&p)) return 4;
 
     uint64_t expect = 0, expect_monitor = 0;
     const int have = arg(cmdline, "expect=", &expect);

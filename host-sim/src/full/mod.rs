@@ -67,9 +67,11 @@
 //! block LU of `block` (or `sparse`), the small dense systems by `dense`. Flight, landings and
 //! stops in flight are in `flight` (its impulses in `flight::impulse`); the static equilibrium,
 //! restart and modes in `statics`; forces, energies and the [`Simulator`](crate::sim::Simulator)
-//! interface in `outputs`. This file holds the public types, the constructors and the kept scratch.
+//! interface in `outputs`; the load vector and mass products of the energy balance in
+//! `balance`. This file holds the public types, the constructors and the kept scratch.
 
 mod assembly;
+mod balance;
 mod block;
 mod bodies;
 mod dense;

@@ -135,7 +135,7 @@ impl FullSolver {
 
     /// Mass of the beam, tube and heads \[kg\]: `[beam] mass` for the uniform beam; on an arm
     /// `−Σ_e (Q_e(g = 1)_y₁ + Q_e(g = 1)_y₂)` (the value shape functions sum to one).
-    fn beam_mass(&self) -> f64 {
+    pub(super) fn beam_mass(&self) -> f64 {
         if self.arm.is_none() {
             return self.params.beam.mass;
         }
