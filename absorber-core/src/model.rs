@@ -392,9 +392,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub fn solve_static(&mut self) -> Result<u32, Error> {
         let (q, iterations) = self.sys.solve_static(&mut self.work)?;
         self.work.clear();
-        let a_eq = self.sys.equilibrium_acceleration(q, &mut self.work);
-        self.work.clear();
-        self.sys.equilibrium_accel = a_eq?;
         self.sys.equilibrium = q;
         self.state = State {
             q,

@@ -30,11 +30,6 @@ pub struct System<T: Real, S: Scene, const N: usize, const D: usize> {
     pub(crate) flight_inertia: TipInertia<T>,
     /// Static equilibrium (zero relative velocity) the run started from.
     pub(crate) equilibrium: SVector<T, D>,
-    /// The acceleration the equations of motion give at [`Self::equilibrium`], at rest and
-    /// without input: `a(q_eq, 0) = −M⁻¹ r(q_eq)`, zero at the exact equilibrium, the static
-    /// solve's residual within its tolerance otherwise. The start from the equilibrium leaves
-    /// it out (`docs/model.md`, "The start from rest").
-    pub(crate) equilibrium_accel: SVector<T, D>,
     /// Scale of each unknown for the convergence test: beam length for positions, 1 otherwise.
     pub(crate) scale: SVector<T, D>,
     /// [`PIVOT_RATIO`] and [`MAX_STEP`] in the scalar (converted once, not per step).
@@ -136,7 +131,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             beam,
             params,
             equilibrium: SVector::zeros(),
-            equilibrium_accel: SVector::zeros(),
             scale,
             pivot_ratio: lit(PIVOT_RATIO),
             max_step: lit(MAX_STEP),
