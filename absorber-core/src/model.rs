@@ -524,7 +524,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 .saturating_sub(crate::newton::work::RESTART)
                 .max(crate::newton::work::MIN_CAP);
         }
-        self.work.begin_step(self.sys.params.integrator.newton, cap);
+        let in_flight = self.state.contact == Contact::InFlight;
+        self.work
+            .begin_step(self.sys.params.integrator.newton, cap, in_flight);
         let result = self
             .sys
             .advance(&mut self.state, base_accel, &mut self.work);

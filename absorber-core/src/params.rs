@@ -254,7 +254,8 @@ pub enum NewtonKind {
     Full,
     /// Modified Newton: the factored Jacobian is kept across iterations and steps and rebuilt
     /// only when an iteration contracts by less than half, or the step length or the ball's
-    /// contact changes. Iterations then cost a residual (no dual numbers, no axial tangent)
+    /// contact changes, and at once in a step that starts with the ball in flight (where the
+    /// landings are, `crate::newton`). Iterations then cost a residual (no dual numbers, no axial tangent)
     /// and a triangular solve. Convergence is linear but fast, because the Newton matrix
     /// `M + γhC + βh²K` changes little from step to step.
     Modified,

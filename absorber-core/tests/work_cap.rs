@@ -107,6 +107,24 @@ fn one_bad_sample_is_followed_by_at_most_ten_error_steps() {
     assert!(later <= 10, "{later} more error steps later on");
 }
 
+/// The start from rest is an ordinary step: one refreshed and one reused Newton iteration (the
+/// ordinary step's units), at N = 3 and at N = 6 in `f32`, on the paper's input. Before the
+/// start's acceleration left out the equilibrium's own, N = 6's first step took 46 units on the
+/// host (52 on the Cortex-M4F): the stiff axial modes turned the static solve's residual into
+/// accelerations of up to 93 m/s², which strained the beam in the first step's predictor.
+#[test]
+fn the_start_from_rest_is_an_ordinary_step() {
+    let ordinary = work::REFRESH + work::RESIDUAL + 2 * work::SOLVE;
+    let omega = 2.0 * core::f32::consts::PI * 4.13;
+    let input = |k: u32| -0.5e-3 * omega * omega * libm::sinf(omega * k as f32 * 0.003);
+    let mut m3 = FreeBallModel::<f32, 3, 13>::at_rest(deadline(), 0.0).expect("start");
+    let mut m6 = FreeBallModel::<f32, 6, 25>::at_rest(deadline(), 0.0).expect("start");
+    let w3 = m3.step(input(1)).expect("first step").work;
+    let w6 = m6.step(input(1)).expect("first step").work;
+    assert!(u32::from(w3) <= ordinary, "N = 3: first step {w3} units");
+    assert!(u32::from(w6) <= ordinary, "N = 6: first step {w6} units");
+}
+
 /// The restart state is `Model::restart`'s start: the same configuration and, at another input,
 /// the acceleration that Newton finds, from the precomputed affine map (to 1e-9 in f64).
 #[test]

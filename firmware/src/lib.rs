@@ -285,8 +285,8 @@ pub struct Modified;
 
 impl Config for Modified {
     const NAME: &'static str = "modified Newton";
-    /// Its hardest paper step takes 62 units (more, cheaper iterations).
-    const MAX_WORK: u32 = 64;
+    /// Its hardest paper step takes 53 units (more, cheaper iterations).
+    const MAX_WORK: u32 = 55;
     fn apply(p: &mut Params<f32>) {
         p.integrator.newton = absorber_core::NewtonKind::Modified;
     }
@@ -294,7 +294,7 @@ impl Config for Modified {
 
 /// The work cap `W` (units) instead of [`absorber_core::newton::work::DEADLINE`], for a scene
 /// whose hardest paper step takes `W − 2`: the beam only and the locked ball (23 units), the
-/// free ball on 6 elements (52); and for the ball held on the track, 47 (its hardest paper step
+/// free ball on 6 elements (46); and for the ball held on the track, 47 (its hardest paper step
 /// converges in 41 units instead of 46, with the factors in hand: `fw-free-rolling`).
 pub struct Cap<const W: u32>;
 

@@ -5,7 +5,7 @@
 
 type M = absorber_firmware::Configured<
     absorber_core::FreeBallModel<f32, 6, 25>,
-    absorber_firmware::Cap<54>,
+    absorber_firmware::Cap<48>,
 >;
 
 absorber_firmware::firmware_main!(M);

@@ -573,7 +573,7 @@ pub fn calibrated(cfg: Config, reference: usize) -> Result<Config> {
 }
 
 /// Version of the cached files (bump when the solver or the sampling changes).
-const CACHE_VERSION: u32 = 4; // 4: the full solver's event accelerations (free-ball references); 3: the noise scenes on ChaCha8 (`rand`); 2: per-solve Newton matrix with the settled-error test, faer LU
+const CACHE_VERSION: u32 = 5; // 5: the start from rest without the equilibrium's own acceleration; 4: the full solver's event accelerations (free-ball references); 3: the noise scenes on ChaCha8 (`rand`); 2: per-solve Newton matrix with the settled-error test, faer LU
 
 /// Full-solver run, cached in `cache` (JSON) under a name made of everything it depends on.
 pub fn cached_full(

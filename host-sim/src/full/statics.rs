@@ -73,11 +73,24 @@ impl FullSolver {
         Ok(iterations)
     }
 
-    /// Restarts at t = 0 from the static equilibrium at rest, ball at `ball.initial_angle`.
+    /// Restarts at t = 0 from the static equilibrium at rest, ball at `ball.initial_angle`, with
+    /// the core's start acceleration `a₀ = a(q₀, u) − a(q_eq, 0)`: the equilibrium's own (its
+    /// static solve's residual through the mass matrix) left out (docs/model.md, "The start from
+    /// rest").
     pub fn restart(&mut self, base_accel: f64) -> Result<(), Error> {
         if !base_accel.is_finite() {
             return Err(Error::NonFiniteInput);
         }
+        let (s, a) = self.start(base_accel, self.params.ball.initial_angle)?;
+        let (_, a_eq) = self.start(0.0, 0.0)?;
+        let a: Vec<f64> = a.iter().zip(&a_eq).map(|(x, y)| x - y).collect();
+        self.state = self.with_accel(&s, &a)?;
+        Ok(())
+    }
+
+    /// The start from the static equilibrium at rest with the ball turned by `angle`, input
+    /// `base_accel`, and its consistent (independent) acceleration.
+    fn start(&self, base_accel: f64, angle: f64) -> Result<(super::FullState, Vec<f64>), Error> {
         let mut s = self.equilibrium.clone();
         s.base_accel = base_accel;
         s.contact = Contact::Off;
@@ -88,7 +101,7 @@ impl FullSolver {
             }
             // Rotate the ball by the initial angle at fixed housing: by c₅, δφ = −(ρ/r_b) δθ.
             let phi = self.zloc(PHI);
-            s.q[phi] -= self.params.ball.initial_angle * self.bodies.rho / self.bodies.rb;
+            s.q[phi] -= angle * self.bodies.rho / self.bodies.rb;
             let qi = self.gather_ind(&s.q, mode);
             let vi = self.gather_ind(&s.v, mode);
             let ai = self.gather_ind(&s.a, mode);
@@ -98,9 +111,7 @@ impl FullSolver {
             }
         }
         let acc = self.consistent_acceleration(&s)?;
-        s = self.with_accel(&s, &acc.x)?;
-        self.state = s;
-        Ok(())
+        Ok((s, acc.x))
     }
 
     /// At the start of a run: the ball's orbit rate θ̇ set to `rate` \[rad/s\] (the spin rate
