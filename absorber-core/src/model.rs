@@ -309,7 +309,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub(crate) fn check_params(params: &Params<T>) -> Result<(), Error> {
         #[allow(clippy::let_unit_value)]
         let () = Self::CHECK;
-        params.validate(S::HAS_TIP, !matches!(S::BALL, BallKind::None))
+        params.validate(S::HAS_TIP, !matches!(S::BALL, BallKind::None))?;
+        if !<S::Data<T, N> as crate::loads::SceneData<T, N>>::SECTIONS
+            && params.calibration.bending_gradient != T::zero()
+        {
+            return Err(Error::InvalidParameter {
+                field: "calibration.bending_gradient",
+                reason: "needs an arm (per-element sections); a uniform beam takes 0",
+            });
+        }
+        Ok(())
     }
 
     /// The undeformed model at rest from checked parameters ([`Model::check_params`]): a plain

@@ -302,6 +302,13 @@ pub struct Calibration<T> {
     /// Fraction μ of the HRZ-lumped mass in the element mass matrix,
     /// `M = (1 − μ) M_consistent + μ M_lumped` \[-\] (0: the paper's consistent mass, eq. 8).
     pub mass_lumping: T,
+    /// Linear gradient `g` of the bending factor along an arm (per-element sections): the
+    /// rigidity of the section at `x` is `E·I(x) · bending_stiffness · (1 + g (2x/L − 1))`
+    /// \[-\] (0: none; `|g| ≤ 0.5`). A second stiffness lever with another modal weight than the
+    /// uniform factor: the first mode's strain energy lies at the clamp, the second's further
+    /// out, so `g` moves f₂ against f₁ (docs/monitoring.md, "Calibrated on f₁ and f₂"). A
+    /// uniform beam has no sections: only 0 is accepted there.
+    pub bending_gradient: T,
 }
 
 impl<T: Real> Default for Calibration<T> {
@@ -310,6 +317,7 @@ impl<T: Real> Default for Calibration<T> {
             bending_stiffness: T::one(),
             axial_stiffness: T::one(),
             mass_lumping: T::zero(),
+            bending_gradient: T::zero(),
         }
     }
 }
@@ -657,6 +665,12 @@ impl<T: Real> Calibration<T> {
             return Err(Error::InvalidParameter {
                 field: "calibration.mass_lumping",
                 reason: "must lie in [0, 1]",
+            });
+        }
+        if !c.bending_gradient.is_finite() || c.bending_gradient.abs() > lit(0.5) {
+            return Err(Error::InvalidParameter {
+                field: "calibration.bending_gradient",
+                reason: "must lie in [-0.5, 0.5]",
             });
         }
         Ok(())

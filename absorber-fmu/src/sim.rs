@@ -287,6 +287,7 @@ pub fn cast_params<T: Real>(p: &Params<f64>) -> Params<T> {
             bending_stiffness: lit(p.calibration.bending_stiffness),
             axial_stiffness: lit(p.calibration.axial_stiffness),
             mass_lumping: lit(p.calibration.mass_lumping),
+            bending_gradient: lit(p.calibration.bending_gradient),
         },
     }
 }

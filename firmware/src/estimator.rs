@@ -55,6 +55,7 @@ fn params() -> Params<f32> {
     let [c, factor, gravity] = g::DAMPING_CALIBRATION_GRAVITY;
     p.damping.stiffness_proportional = c;
     p.calibration.bending_stiffness = factor;
+    p.calibration.bending_gradient = g::BENDING_GRADIENT;
     p.gravity = gravity;
     p
 }

@@ -7,7 +7,9 @@ pub const BEAM: [f32; 5] = [f32::from_bits(0x4186147b), f32::from_bits(0x4410400
 /// Integrator: γ, β, α_m, α_f, h, tolerance.
 pub const INTEGRATOR: [f32; 6] = [f32::from_bits(0x3f0d7943), f32::from_bits(0x3e8dd409), f32::from_bits(0x3ed79436), f32::from_bits(0x3ef286bd), f32::from_bits(0x3c23d70a), f32::from_bits(0x358637bd)];
 /// Stiffness-proportional damping c \[s\], E·I calibration factor, gravity.
-pub const DAMPING_CALIBRATION_GRAVITY: [f32; 3] = [f32::from_bits(0x3a7309b7), f32::from_bits(0x3f91a31f), f32::from_bits(0x411cf5c3)];
+pub const DAMPING_CALIBRATION_GRAVITY: [f32; 3] = [f32::from_bits(0x3a7309b7), f32::from_bits(0x3f964808), f32::from_bits(0x411cf5c3)];
+/// Gradient of the E·I calibration factor along the arm (calibrated on f₁ and f₂).
+pub const BENDING_GRADIENT: f32 = f32::from_bits(0x3da9138f);
 /// Arm: root and tip diameter, wall, density.
 pub const ARM: [f32; 4] = [f32::from_bits(0x3ea8f5c3), f32::from_bits(0x3e09ba5e), f32::from_bits(0x3b95182b), f32::from_bits(0x45f55000)];
 /// Point masses (position, mass).
@@ -21,8 +23,8 @@ pub const CATEGORY: absorber_core::monitor::DetailCategory =
     absorber_core::monitor::DetailCategory::EPrime;
 /// Gain rows: q, v, a, pseudo_accel.
 pub const GAIN_Q: [f32; 12] = [f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000), f32::from_bits(0x00000000)];
-pub const GAIN_V: [f32; 12] = [f32::from_bits(0xb5f85bd0), f32::from_bits(0xb88b6bf3), f32::from_bits(0xb52a6a85), f32::from_bits(0xb7c7da51), f32::from_bits(0xb7a82bf5), f32::from_bits(0xba364cde), f32::from_bits(0xb715f020), f32::from_bits(0xb99c87fd), f32::from_bits(0x39078e38), f32::from_bits(0x3b6e1b8f), f32::from_bits(0x38e206fc), f32::from_bits(0x3b4b45a7)];
-pub const GAIN_A: [f32; 12] = [f32::from_bits(0xb9379ffe), f32::from_bits(0x3b2ce105), f32::from_bits(0xb7e3c386), f32::from_bits(0x3aca27bd), f32::from_bits(0xbb054314), f32::from_bits(0xbd55ba1d), f32::from_bits(0xbaa61023), f32::from_bits(0xbd2b3b7d), f32::from_bits(0x3d0afda9), f32::from_bits(0x3f7eb8ac), f32::from_bits(0x3cbcb5ea), f32::from_bits(0x3f299ee6)];
-pub const GAIN_PA: [f32; 12] = [f32::from_bits(0xb926d5f7), f32::from_bits(0x3b1e2986), f32::from_bits(0xb7d01185), f32::from_bits(0x3ab65eca), f32::from_bits(0xbaf258e6), f32::from_bits(0xbd425af2), f32::from_bits(0xba96cd84), f32::from_bits(0xbd1b7b9d), f32::from_bits(0x3cfcbf49), f32::from_bits(0x3f679a07), f32::from_bits(0x3cab8f77), f32::from_bits(0x3f1a34c5)];
+pub const GAIN_V: [f32; 12] = [f32::from_bits(0xb5fe5534), f32::from_bits(0xb88fdb4c), f32::from_bits(0xb5314f23), f32::from_bits(0xb7d07ae7), f32::from_bits(0xb7aead02), f32::from_bits(0xba3e0d5e), f32::from_bits(0xb719c10c), f32::from_bits(0xb9a066fd), f32::from_bits(0x39047734), f32::from_bits(0x3b6cee51), f32::from_bits(0x38d971cb), f32::from_bits(0x3b46b6b6)];
+pub const GAIN_A: [f32; 12] = [f32::from_bits(0xb932071f), f32::from_bits(0x3b43a6f1), f32::from_bits(0xb7cd0dd9), f32::from_bits(0x3ad7cf47), f32::from_bits(0xbb0b46be), f32::from_bits(0xbd637c48), f32::from_bits(0xbaaa75f5), f32::from_bits(0xbd2f79d1), f32::from_bits(0x3d089b5e), f32::from_bits(0x3f7eac9b), f32::from_bits(0x3cb5c9f2), f32::from_bits(0x3f260bb2)];
+pub const GAIN_PA: [f32; 12] = [f32::from_bits(0xb921bc48), f32::from_bits(0x3b32edab), f32::from_bits(0xb7bbb04b), f32::from_bits(0x3ac284c5), f32::from_bits(0xbafd46a3), f32::from_bits(0xbd4edbd0), f32::from_bits(0xba9ac896), f32::from_bits(0xbd1f5262), f32::from_bits(0x3cf868c3), f32::from_bits(0x3f678e61), f32::from_bits(0x3ca54372), f32::from_bits(0x3f16f3c1)];
 /// Load gain, load decay, bias gain, stress sd, load sd, innovation sd.
-pub const GAIN_SCALARS: [f32; 6] = [f32::from_bits(0x40b67eca), f32::from_bits(0x3f7f7d0f), f32::from_bits(0x3914f808), f32::from_bits(0x48a9c93b), f32::from_bits(0x40f814f8), f32::from_bits(0x3c902812)];
+pub const GAIN_SCALARS: [f32; 6] = [f32::from_bits(0x40b860b5), f32::from_bits(0x3f7f7d0f), f32::from_bits(0x3917ba77), f32::from_bits(0x48a9d83b), f32::from_bits(0x40f82a5d), f32::from_bits(0x3c8d88e4)];

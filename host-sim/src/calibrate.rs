@@ -230,6 +230,7 @@ fn calibration_of(x: &[f64; 3]) -> Calibration<f64> {
         bending_stiffness: x[0].exp().clamp(BENDING.0, BENDING.1),
         axial_stiffness: x[1].exp().clamp(AXIAL.0, AXIAL.1),
         mass_lumping: x[2].clamp(0.0, 1.0),
+        bending_gradient: 0.0,
     }
 }
 

@@ -212,6 +212,7 @@ pub fn params_f32(p: &Params<f64>) -> Params<f32> {
             bending_stiffness: p.calibration.bending_stiffness as f32,
             axial_stiffness: p.calibration.axial_stiffness as f32,
             mass_lumping: p.calibration.mass_lumping as f32,
+            bending_gradient: p.calibration.bending_gradient as f32,
         },
     }
 }

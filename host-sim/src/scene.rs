@@ -258,6 +258,7 @@ impl CalibrationSection {
             bending_stiffness: self.bending_stiffness,
             axial_stiffness: self.axial_stiffness,
             mass_lumping: self.mass_lumping,
+            bending_gradient: 0.0,
         }
     }
 }

@@ -162,6 +162,7 @@ impl Config {
                 bending_stiffness: bending,
                 axial_stiffness: axial,
                 mass_lumping: lumping,
+                bending_gradient: 0.0,
             };
         }
         match self.newton {

@@ -347,8 +347,14 @@ fn print_lab(r: &LabReport) {
 
 fn print_twin(r: &TwinReport) {
     println!(
-        "twin: truth = full solver, 16 elements, f64; estimate = core, 3 elements, f32 (E·I × {:.4}: f1 {:.4} Hz as the truth's {:.4} Hz); {} s",
-        r.bending_factor, r.frequencies.1, r.frequencies.0, r.duration
+        "twin: truth = full solver, 16 elements, f64; estimate = core, 3 elements, f32 (E·I × {:.4}, gradient {:+.4}: f1 {:.4} / f2 {:.4} Hz as the truth's {:.4} / {:.4} Hz); {} s",
+        r.bending_factor,
+        r.bending_gradient,
+        r.frequencies.1,
+        r.second_frequencies.1,
+        r.frequencies.0,
+        r.second_frequencies.0,
+        r.duration
     );
     println!(
         "root stress: true RMS about the mean {:.3} MPa, largest range {:.1} MPa; static: truth {:.2}, model {:.2} MPa; tip accelerometer clipped {:.1} % of its readings",

@@ -1,6 +1,7 @@
 //! The twin of a real arm (`host-sim estimate --scene scenes/mast-arm.toml`): the full solver
 //! (16 elements, `f64`) of the scene's arm under its `[[loads]]`, read by its `[[sensors]]`;
-//! the estimators (core, `N = 3`, `f32`, E·I calibrated so that f₁ is the truth's) with each
+//! the estimators (core, `N = 3`, `f32`, E·I and its gradient along the arm calibrated so that
+//! f₁ and f₂ are the truth's, [`calibrate_arm`]) with each
 //! sensor set the scene allows (tip accelerometer, root strain gauge, both), and the
 //! constant-gain baseline on the accelerometer.
 
@@ -43,8 +44,12 @@ pub struct TwinReport {
     pub static_stress_mpa: (f64, f64),
     /// First frequency of the truth (16 elements) and of the reduced model, calibrated \[Hz\].
     pub frequencies: (f64, f64),
+    /// Second frequency of the truth and of the reduced model, calibrated \[Hz\].
+    pub second_frequencies: (f64, f64),
     /// The calibration's bending-stiffness factor.
     pub bending_factor: f64,
+    /// The calibration's gradient of that factor along the arm.
+    pub bending_gradient: f64,
     /// The filter's load model, noise model and stress factors.
     pub setup: Setup,
     /// Readings beyond the tip accelerometer's range, in % of its readings.
@@ -110,21 +115,28 @@ pub fn calibrate_bending(params: &Params<f64>, arm: &ArmParams<f64>, target: f64
 }
 
 /// The reduced arm's first two frequencies \[Hz\].
-fn reduced_pair(params: &Params<f64>, arm: &ArmParams<f64>) -> Result<(f64, f64)> {
+pub fn reduced_pair(params: &Params<f64>, arm: &ArmParams<f64>) -> Result<(f64, f64)> {
     let m = ArmModel::<f64>::arm_at_rest(*params, arm, 0.0).map_err(core)?;
     let f = m.natural_frequencies().map_err(core)?;
     Ok((f[0], f[1]))
 }
 
-/// The calibration that gives the reduced arm the truth's first two frequencies `target`: the
-/// E·I factor and the lumped mass fraction (`absorber_core::Calibration`), by Newton on
-/// `(ln f₁, ln f₂)` with a numerical Jacobian, to 1e-9 relative.
+/// The calibration that gives the reduced arm the truth's first two frequencies `target`
+/// (docs/monitoring.md, "Calibrated on f₁ and f₂"): the uniform E·I factor `b` and its linear
+/// gradient along the arm `g` (`absorber_core::Calibration`), by Newton on `(ln f₁, ln f₂)`
+/// with a central-difference Jacobian, from the f₁-only factor ([`calibrate_bending`], `g = 0`),
+/// to 1e-9 relative. Why these two: `∂ ln f_i / ∂ ln EI_k` is half the share of element `k`
+/// in mode `i`'s strain energy (Rayleigh); the first mode's lies at the clamp, the second's
+/// further out, so `b` moves both alike and `g` moves f₂ against f₁. The mass blend cannot: it
+/// lowers f₂/f₁ (lumping), and the reduced model's is already low.
 pub fn calibrate_arm(
     params: &Params<f64>,
     arm: &ArmParams<f64>,
     target: (f64, f64),
 ) -> Result<absorber_core::Calibration<f64>> {
     let mut c = params.calibration;
+    c.bending_stiffness = calibrate_bending(params, arm, target.0)?;
+    c.bending_gradient = 0.0;
     let eval = |c: &absorber_core::Calibration<f64>| -> Result<[f64; 2]> {
         let mut p = *params;
         p.calibration = *c;
@@ -136,25 +148,28 @@ pub fn calibrate_arm(
         if r[0].abs() < 1e-9 && r[1].abs() < 1e-9 {
             return Ok(c);
         }
-        let (db, dl) = (1e-4 * c.bending_stiffness, 1e-4);
-        let mut cb = c;
-        cb.bending_stiffness += db;
-        let rb = eval(&cb)?;
-        let mut cl = c;
-        cl.mass_lumping += dl;
-        let rl = eval(&cl)?;
-        let j = [
-            [(rb[0] - r[0]) / db, (rl[0] - r[0]) / dl],
-            [(rb[1] - r[1]) / db, (rl[1] - r[1]) / dl],
-        ];
-        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-        if det.abs() < 1e-300 {
+        let (db, dg) = (1e-5 * c.bending_stiffness, 1e-5);
+        let column = |set: &dyn Fn(&mut absorber_core::Calibration<f64>, f64), d: f64| {
+            let (mut up, mut down) = (c, c);
+            set(&mut up, d);
+            set(&mut down, -d);
+            let (ru, rd) = (eval(&up)?, eval(&down)?);
+            Ok::<_, anyhow::Error>([(ru[0] - rd[0]) / (2.0 * d), (ru[1] - rd[1]) / (2.0 * d)])
+        };
+        let jb = column(&|c, d| c.bending_stiffness += d, db)?;
+        let jg = column(&|c, d| c.bending_gradient += d, dg)?;
+        let det = jb[0] * jg[1] - jg[0] * jb[1];
+        if det.is_nan() || det.abs() <= 1e-300 {
             break;
         }
-        c.bending_stiffness -= (j[1][1] * r[0] - j[0][1] * r[1]) / det;
-        c.mass_lumping -= (-j[1][0] * r[0] + j[0][0] * r[1]) / det;
-        if !(c.bending_stiffness > 0.0 && (0.0..=1.0).contains(&c.mass_lumping)) {
-            bail!("the reduced arm's calibration to f1 and f2 left its range (E·I factor {}, lumping {})", c.bending_stiffness, c.mass_lumping);
+        c.bending_stiffness -= (jg[1] * r[0] - jg[0] * r[1]) / det;
+        c.bending_gradient -= (-jb[1] * r[0] + jb[0] * r[1]) / det;
+        if c.validate().is_err() {
+            bail!(
+                "the reduced arm's calibration to f1 and f2 left its range (E·I factor {}, gradient {})",
+                c.bending_stiffness,
+                c.bending_gradient
+            );
         }
     }
     bail!("the reduced arm's calibration to f1 and f2 did not converge")
@@ -207,7 +222,7 @@ fn truth(
     a: &ArmScene,
     steps: usize,
     loads: &dyn Fn(f64) -> (f64, Vec<f64>),
-) -> Result<(Truth, f64)> {
+) -> Result<(Truth, (f64, f64))> {
     let params = a.params;
     let h = params.integrator.step;
     let mut pt = params;
@@ -220,7 +235,8 @@ fn truth(
         0.0,
     )
     .map_err(core)?;
-    let f1 = s.frequencies().map_err(core)?[0];
+    let f = s.frequencies().map_err(core)?;
+    let f12 = (f[0], f[1]);
     let section = root_section(&params, &a.arm)?;
     let sec0 = arm_section(
         &a.arm,
@@ -257,13 +273,20 @@ fn truth(
         t.stress.push(stress_of(s.state(), line[0]));
         t.tip_accel.push(s.state().a[tip]);
     }
-    Ok((t, f1))
+    Ok((t, f12))
 }
 
 /// The filter's setup for the arm (module doc of [`filter`]): corner at f₁, load scale from
-/// the design loads' increments, stress factors from the 16-element arm, ε from a calibration
-/// run under a seeded tip force with the design loads' spectrum ([`filter::surrogate`]).
-fn setup(a: &ArmScene, pc: &Params<f64>, section: &RootSection<f64>, window: u32) -> Result<Setup> {
+/// the design loads' increments, stress factors from the 16-element arm, ε from calibration
+/// runs under seeded tip forces with the design loads' spectrum ([`filter::surrogate`]), the
+/// draws of `seeds` pooled (the studies: [`filter::calibration_seeds`] of [`filter::ARM_CALIBRATION_DRAWS`]).
+fn setup(
+    a: &ArmScene,
+    pc: &Params<f64>,
+    section: &RootSection<f64>,
+    window: u32,
+    seeds: &[u64],
+) -> Result<Setup> {
     let h = pc.integrator.step;
     let model = ArmModel::<f64>::arm_at_rest(*pc, &a.arm, 0.0).map_err(core)?;
     let ours = filter::modal_stress_ratios(&model, section)?;
@@ -285,27 +308,37 @@ fn setup(a: &ArmScene, pc: &Params<f64>, section: &RootSection<f64>, window: u32
         adapt_time: filter::adapt_time(),
         load_rms: super::rms(&history),
     };
-    // Calibration: 60 s of a tip force with the design load's spectrum (another realization).
+    // Calibration: 60 s of a tip force with the design load's spectrum (another realization)
+    // per draw, the draws pooled.
     const SECONDS: f64 = 60.0;
     let steps = (SECONDS / h).round() as usize;
-    let force = filter::surrogate(&history, steps, h, 0x5EED);
-    let loads = |t: f64| {
-        (
-            force.get((t / h).round() as usize).copied().unwrap_or(0.0),
-            vec![0.0; TRUTH_ELEMENTS],
-        )
-    };
-    let (t, _) = truth(a, steps, &loads)?;
-    let m = filter::measure(&t, &a.specs, h, 1)?;
+    let mut draws = Vec::new();
+    for seed in seeds {
+        let force = filter::surrogate(&history, steps, h, *seed);
+        let loads = |t: f64| {
+            (
+                force.get((t / h).round() as usize).copied().unwrap_or(0.0),
+                vec![0.0; TRUTH_ELEMENTS],
+            )
+        };
+        let (t, _) = truth(a, steps, &loads)?;
+        let m = filter::measure(&t, &a.specs, h, 1)?;
+        draws.push((t, m));
+    }
     // ε from the tip accelerometer's innovations: what the online estimate (ADAPT_TIME) has
     // not yet caught, from the start (a scene without the accelerometer: ε = 0, the online
     // estimate alone).
-    if m.spec(SensorKind::TipAccel).is_some() {
+    if a.specs.iter().any(|x| x.kind() == SensorKind::TipAccel) {
         s.model_error = filter::matched(|eps| {
             let mut c = s;
             c.model_error = eps;
-            let r = run_filter(pc, a, &c, section, &m, &[SensorKind::TipAccel], &t)?;
-            Ok(r.excess.quiet_excess())
+            let runs = draws
+                .iter()
+                .map(|(t, m)| {
+                    run_filter(pc, a, &c, section, m, &[SensorKind::TipAccel], t).map(|r| r.excess)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Ok(filter::Excess::pooled(runs).quiet_excess())
         })?;
     }
     Ok(s)
@@ -356,12 +389,17 @@ pub fn twin(
     let (truth, f_truth) = truth(&a, steps, &|t| a.loads.sample(t, TRUTH_ELEMENTS))?;
     let section = root_section(&params, &a.arm)?;
     let mut pc = params;
-    pc.calibration.bending_stiffness = calibrate_bending(&params, &a.arm, f_truth)?;
-    let factor = pc.calibration.bending_stiffness;
-    let f_reduced = reduced_frequency(&pc, &a.arm)?;
+    pc.calibration = calibrate_arm(&params, &a.arm, f_truth)?;
+    let f_reduced = reduced_pair(&pc, &a.arm)?;
     pc.integrator.tolerance = super::ESTIMATOR_TOLERANCE;
     let window = (1.0 / h).round() as u32;
-    let s = setup(&a, &pc, &section, window)?;
+    let s = setup(
+        &a,
+        &pc,
+        &section,
+        window,
+        &filter::calibration_seeds(filter::ARM_CALIBRATION_DRAWS),
+    )?;
     // Only the start is known at rest: the loads act from t = 0.
     let m = filter::measure(&truth, &a.specs, h, 1)?;
     let has = |k: SensorKind| a.specs.iter().any(|s| s.kind() == k);
@@ -452,8 +490,10 @@ pub fn twin(
         true_stress_rms_mpa: rms_about_mean(&truth.stress) / 1e6,
         max_range_mpa: max_range / 1e6,
         static_stress_mpa: (truth.static_stress / 1e6, static_est / 1e6),
-        frequencies: (f_truth, f_reduced),
-        bending_factor: factor,
+        frequencies: (f_truth.0, f_reduced.0),
+        second_frequencies: (f_truth.1, f_reduced.1),
+        bending_factor: pc.calibration.bending_stiffness,
+        bending_gradient: pc.calibration.bending_gradient,
         setup: s,
         clipped_pct: 100.0 * clipped as f64 / readings.max(1) as f64,
         estimators,
@@ -493,18 +533,81 @@ mod tests {
             .unwrap_or_else(|| panic!("no {estimator} {sensors:?}"))
     }
 
+    /// The mast arm's N = 3 model calibrated on f₁ and f₂ of the truth (full solver, 16
+    /// elements): both to 1e-8 (the fit's own tolerance, 1e-9, plus the eigen-solve), and what
+    /// was not fitted follows: f₃ within 0.5 % of the truth's (measured +0.24 %; −1.9 % with
+    /// the E·I factor alone) and the second mode's root stress per tip acceleration within 1 %
+    /// of the 16-element core arm's (stress factor measured 0.998; 0.980 with the factor
+    /// alone). Why the gradient and not the mass blend: lumping lowers f₂/f₁ (measured
+    /// 4.496 → 4.429 at μ = 0.1), and the f₁-only model's 4.496 is already below the truth's
+    /// 4.578.
+    #[test]
+    fn the_arm_model_calibrated_on_f1_and_f2_gets_f3_and_the_second_mode_stress() {
+        let a = ArmScene::of(&scene("mast-arm.toml")).expect("arm");
+        let mut pt = a.params;
+        pt.integrator.tolerance = TRUTH_TOLERANCE;
+        let f = crate::full::FullSolver::arm_at_rest(
+            pt,
+            crate::full::SceneKind::BeamOnly,
+            TRUTH_ELEMENTS,
+            &a.arm,
+            0.0,
+        )
+        .expect("truth")
+        .frequencies()
+        .expect("modes");
+        let c = calibrate_arm(&a.params, &a.arm, (f[0], f[1])).expect("calibration");
+        assert!(
+            c.bending_gradient > 0.0 && c.bending_gradient < 0.5,
+            "{c:?}"
+        );
+        let mut p = a.params;
+        p.calibration = c;
+        let model = ArmModel::<f64>::arm_at_rest(p, &a.arm, 0.0).expect("model");
+        let g = model.natural_frequencies().expect("modes");
+        for i in 0..2 {
+            assert!(
+                (g[i] / f[i] - 1.0).abs() < 1e-8,
+                "f{}: {} vs {}",
+                i + 1,
+                g[i],
+                f[i]
+            );
+        }
+        assert!((g[2] / f[2] - 1.0).abs() < 5e-3, "f3: {} vs {}", g[2], f[2]);
+        let section = root_section(&a.params, &a.arm).expect("section");
+        let reference = ArmReference::arm_at_rest(a.params, &a.arm, 0.0).expect("reference");
+        let theirs = filter::modal_stress_ratios(&reference, &section).expect("ratios");
+        let ours = filter::modal_stress_ratios(&model, &section).expect("ratios");
+        let second = theirs.0[1] / ours.0[1];
+        assert!(
+            (second - 1.0).abs() < 0.01,
+            "second-mode stress factor {second}"
+        );
+        let mut only_b = a.params;
+        only_b.calibration.bending_stiffness =
+            calibrate_bending(&a.params, &a.arm, f[0]).expect("f1");
+        let (b1, b2) = reduced_pair(&only_b, &a.arm).expect("pair");
+        let mut lumped = only_b;
+        lumped.calibration.mass_lumping = 0.1;
+        let (l1, l2) = reduced_pair(&lumped, &a.arm).expect("pair");
+        assert!(
+            b2 / b1 < f[1] / f[0] && l2 / l1 < b2 / b1,
+            "{b1} {b2} {l1} {l2}"
+        );
+    }
+
     /// The mast arm under first-mode wind (10 min: gusts, trucks, three vortex-shedding
     /// episodes at f1), truth = full solver (16 elements, f64): the extended Kalman filter on
-    /// the tip accelerometer has a Miner damage ratio within 0.9–1.1 (measured 0.998; the
-    /// first mode's stress factor 1.048 removes the constant-gain filter's −13 %, whose
-    /// 0.867 is held here too as the unchanged baseline) and a stress RMS error ≤ 5 %
-    /// (measured 2.6 %; the baseline's 5.0 %). The model is right here: the mean NIS of a
-    /// consistent filter, 0.5–2 (measured 0.77, with the strain gauge 1.04); before the noise
-    /// model was calibrated under the design loads' spectrum it was 0.29.
+    /// the tip accelerometer has a Miner damage ratio within 0.9–1.1 (measured 0.997: the
+    /// first mode's stress factor 0.967 corrects the model's stress recovery, which the
+    /// constant-gain filter lacks) and a stress RMS error ≤ 5 % (measured 2.5 %). The model is
+    /// right here: the mean NIS of a consistent filter, 0.5–2 (measured 0.52, with the strain
+    /// gauge 0.84; ε matched on 16 pooled draws of the calibration load — on one draw the
+    /// tip accelerometer's NIS is 0.27–0.59 over seeds 1–8). The constant-gain baseline is
+    /// pinned as measured with the model calibrated on f1 and f2 (3.8 %, 1.103; with f1 alone
+    /// 3.1 %, 1.076; before the end sign was modelled 5.0 %, 0.867).
     #[test]
-    #[ignore = "fails since the arm's 10 kg end sign is modelled (docs/monitoring.md, the end sign): \
-                tip-only NIS 0.46 (target 0.5–2), the constant-gain baseline 3.1 %, 1.076; the \
-                N = 3 calibration fits f1 only"]
     fn ekf_removes_the_first_mode_damage_bias() {
         let (r, s) = twin(
             &scene("mast-arm.toml"),
@@ -522,23 +625,22 @@ mod tests {
         assert!((0.9..=1.1).contains(&both.damage_ratio), "{both:?}");
         assert!((0.5..=2.0).contains(&both.nis), "{both:?}");
         let before = find(&r, "constant-gain", &["tip_accel"]);
-        assert!((before.damage_ratio - 0.867).abs() < 0.005, "{before:?}");
+        assert!((before.damage_ratio - 1.103).abs() < 0.005, "{before:?}");
         assert!(
-            (before.stress_rms_error_pct - 5.0).abs() < 0.1,
+            (before.stress_rms_error_pct - 3.8).abs() < 0.1,
             "{before:?}"
         );
     }
 
     /// Second-mode vortex lock-in (4.70 Hz at 19.6 m/s, three episodes): with a ±8 g
     /// accelerometer (no clipping) the filter meets ≤ 15 % and a damage ratio of 0.8–1.25
-    /// (measured 4.3 %, 0.892; with the strain gauge 3.3 %, 0.925) with a consistent NIS
-    /// (0.5–2, measured 0.99); with the shipped ±2 g part, which clips 28 % of the readings,
+    /// (measured 2.0 %, 0.998; with the strain gauge 0.7 %, 0.993) with a consistent NIS
+    /// (0.5–2, measured 0.96) — with the model calibrated on f1 and f2; calibrated on f1 alone
+    /// its second mode sat 1.8 % low, beside the forcing, and the filter was 20.9 % off with a
+    /// damage ratio of 0.630. With the shipped ±2 g part, which clips 28 % of the readings,
     /// the clipped readings are detected and the verdict is never `ok` — the constant-gain
-    /// baseline's included (102 % off: `failed`).
+    /// baseline's included (86.7 % off: `failed`).
     #[test]
-    #[ignore = "fails since the arm's 10 kg end sign is modelled (docs/monitoring.md, the end sign): \
-                20.9 %, damage 0.630 under second-mode lock-in; the N = 3 calibration fits f1 \
-                only, its second mode is 1.8 % low"]
     fn second_mode_lock_in_is_estimated_and_clipping_is_flagged() {
         let (r, _) = twin(
             &scene("mast-arm-second-mode.toml"),
@@ -566,6 +668,59 @@ mod tests {
         {
             assert_ne!(e.verdict, "ok", "{e:?}");
             assert!(e.clipped[0] > 0, "{e:?}");
+        }
+    }
+
+    /// Measurement, not a check (`cargo test --release -p host-sim --lib
+    /// calibration_draw_spread -- --ignored --nocapture`, a few minutes): the model error ε
+    /// matched on one draw of the calibration load against K pooled draws, and the tip
+    /// accelerometer's mean NIS on the 10 min study with it — the spread over draws that
+    /// docs/monitoring.md ("One draw is not enough") quotes and `ARM_CALIBRATION_DRAWS` rests on.
+    #[test]
+    #[ignore = "measurement (prints the spread of ε over calibration draws; minutes)"]
+    fn calibration_draw_spread() {
+        for name in ["mast-arm.toml", "mast-arm-second-mode.toml"] {
+            let a = ArmScene::of(&scene(name)).expect("arm");
+            let params = a.params;
+            let h = params.integrator.step;
+            let steps = (600.0 / h).round() as usize;
+            let (truth, f_truth) =
+                truth(&a, steps, &|t| a.loads.sample(t, TRUTH_ELEMENTS)).expect("truth");
+            let section = root_section(&params, &a.arm).expect("section");
+            let mut pc = params;
+            pc.calibration = calibrate_arm(&params, &a.arm, f_truth).expect("calibration");
+            pc.integrator.tolerance = super::super::ESTIMATOR_TOLERANCE;
+            let window = (1.0 / h).round() as u32;
+            let m = filter::measure(&truth, &a.specs, h, 1).expect("readings");
+            let mut sets: Vec<(String, Vec<u64>)> =
+                vec![("one draw, 0x5EED".into(), vec![filter::CALIBRATION_SEED])];
+            for k in 1..=8u64 {
+                sets.push((format!("one draw, seed {k}"), vec![k]));
+            }
+            for k in [4u64, 8, 16] {
+                let from = filter::CALIBRATION_SEED;
+                sets.push((format!("K = {k} from 0x5EED"), (from..from + k).collect()));
+                // Disjoint sets of seeds from 1 (as quoted in the docs: 4, 3 and 2 sets).
+                for j in 0..(16 / k + 1).min(4) {
+                    let first = 1 + j * k;
+                    sets.push((
+                        format!("K = {k} from {first}"),
+                        (first..first + k).collect(),
+                    ));
+                }
+            }
+            for (label, seeds) in sets {
+                let s = setup(&a, &pc, &section, window, &seeds).expect("setup");
+                let tip = run_filter(&pc, &a, &s, &section, &m, &[SensorKind::TipAccel], &truth)
+                    .expect("filter");
+                println!(
+                    "{name}, {label}: ε {:.4}, tip accelerometer NIS {:.3}, {:.2} %, damage {:.3}",
+                    s.model_error,
+                    tip.report.nis,
+                    tip.report.stress_rms_error_pct,
+                    tip.report.damage_ratio
+                );
+            }
         }
     }
 }

@@ -15,11 +15,13 @@
 //! **Noise model**. Each sensor's own white noise, plus the reduced model's error: a
 //! fraction ε of the running RMS of the predicted measurement (mode shapes and frequencies of
 //! 3 elements against 16), and around the ball's events a further ε_e (the two solvers put
-//! impacts, take-offs and landings at other instants). Both are measured, not tuned: a
-//! calibration run of the same arm against the full solver under a seeded tip force with the
-//! design load's spectrum ([`surrogate`]: another realization, not any study's load) runs the
-//! filter, and ε² is the value at which the excess of the innovations' variance over the
-//! filter's prediction, per unit of the predicted measurement's mean square, vanishes
+//! impacts, take-offs and landings at other instants). Both are measured, not tuned:
+//! calibration runs of the same arm against the full solver under seeded tip forces with the
+//! design load's spectrum ([`surrogate`]: other realizations, not any study's load; several
+//! draws pooled, [`ARM_CALIBRATION_DRAWS`], [`LAB_CALIBRATION_DRAWS`]) run the filter, and ε²
+//! is the value at which the excess of the innovations' variance over the filter's
+//! prediction, per unit of the predicted measurement's mean square, summed over the draws,
+//! vanishes
 //! (covariance matching, Mehra 1972, iterated to its fixed point: [`matched`]) — ε_e the same
 //! near events, from the free ball's calibration run (it reaches the stops near the 2:1
 //! tuning). See `docs/monitoring.md`, "Noise model".
@@ -290,6 +292,28 @@ pub fn surrogate(history: &[f64], steps: usize, h: f64, seed: u64) -> Vec<f64> {
         .collect()
 }
 
+/// Seed of the first draw of the calibration load's phases ([`surrogate`]).
+pub const CALIBRATION_SEED: u64 = 0x5EED;
+/// Draws of the calibration load the mast arm's noise model is matched on, pooled
+/// ([`Excess::pooled`]): one 60 s draw's fixed point of ε moves by a factor 5 with its phases
+/// (first-mode wind, seeds 1–8: 0.0059–0.0301, the tip accelerometer's mean NIS 0.27–0.59),
+/// since a draw's error sits where its few resonant bursts fall; 16 draws pooled, one
+/// 16-minute calibration run, move it by ±8 % (three disjoint sets: 0.0078–0.0091).
+pub const ARM_CALIBRATION_DRAWS: u64 = 16;
+/// The same for the lab study (30 s draws): still one. Four pooled draws move its ε at
+/// 4.05 / 4.10 / 4.13 Hz from 0.0416 / 0.0156 / 0.0144 to 0.0090 / 0.0180 / 0.0074, but with
+/// them one member of the 4.10 Hz ensemble keeps the ball on the wrong side with the ball-angle
+/// encoder (13.1 % stress error against the 10 % target, NIS 13.6): the working point's
+/// ensemble is a draw too (docs/monitoring.md, "One run is a draw"), not settled here.
+pub const LAB_CALIBRATION_DRAWS: u64 = 1;
+
+/// The phase seeds of `draws` calibration draws from [`CALIBRATION_SEED`].
+pub fn calibration_seeds(draws: u64) -> Vec<u64> {
+    (0..draws)
+        .map(|k| CALIBRATION_SEED.wrapping_add(k))
+        .collect()
+}
+
 /// Relative difference of frequency within which a mode of the reduced model and the
 /// reference's mode of the same index are the same mode (module doc of [`stress_factors`]).
 pub const MODE_PAIRING: f64 = 0.05;
@@ -382,6 +406,17 @@ pub struct Excess {
 }
 
 impl Excess {
+    /// The sums of several calibration runs pooled: the matching over all their samples, as
+    /// one longer run.
+    pub fn pooled(runs: impl IntoIterator<Item = Excess>) -> Excess {
+        let add = |a: (f64, f64), b: (f64, f64)| (a.0 + b.0, a.1 + b.1);
+        runs.into_iter().fold(Excess::default(), |p, r| Excess {
+            quiet: add(p.quiet, r.quiet),
+            quiet_nis: add(p.quiet_nis, r.quiet_nis),
+            events: add(p.events, r.events),
+        })
+    }
+
     /// The signed excess of the innovations' variance over the prediction per unit of the
     /// predicted measurement's mean square, away from events: `Σ (ν² − s) / Σ rms²`.
     pub fn quiet_excess(&self) -> f64 {

@@ -1,7 +1,7 @@
 //! The firmware's estimator as constants (`host-sim estimate --emit-firmware`): the
 //! constant-gain estimator of a scene's arm (`firmware/src/estimator_gain.rs`).
 
-use super::arm::{calibrate_bending, root_section, ArmModel, D};
+use super::arm::{calibrate_arm, root_section, ArmModel, D};
 use super::constant::{design, FilterNoise};
 use super::filter::ACCEL_BIAS_WALK;
 use super::TRUTH_TOLERANCE;
@@ -40,7 +40,7 @@ pub fn constants(scene: &Scene) -> Result<String> {
     let f_truth = {
         let mut pt = params;
         pt.integrator.tolerance = TRUTH_TOLERANCE;
-        crate::full::FullSolver::arm_at_rest(
+        let f = crate::full::FullSolver::arm_at_rest(
             pt,
             crate::full::SceneKind::BeamOnly,
             TRUTH_ELEMENTS,
@@ -49,11 +49,11 @@ pub fn constants(scene: &Scene) -> Result<String> {
         )
         .map_err(core)?
         .frequencies()
-        .map_err(core)?[0]
+        .map_err(core)?;
+        (f[0], f[1])
     };
-    let factor = calibrate_bending(&params, &arm, f_truth)?;
     let mut pc = params;
-    pc.calibration.bending_stiffness = factor;
+    pc.calibration = calibrate_arm(&params, &arm, f_truth)?;
     let mut pd = pc;
     pd.integrator.tolerance = 1e-13;
     pd.integrator.newton = absorber_core::NewtonKind::Full;
@@ -111,6 +111,12 @@ pub fn constants(scene: &Scene) -> Result<String> {
         b(p.damping.stiffness_proportional),
         b(p.calibration.bending_stiffness),
         b(p.gravity)
+    );
+    let _ = write!(
+        o,
+        "/// Gradient of the E·I calibration factor along the arm (calibrated on f₁ and f₂).\n\
+         pub const BENDING_GRADIENT: f32 = {};\n",
+        b(p.calibration.bending_gradient)
     );
     let _ = write!(
         o,

@@ -247,8 +247,9 @@ fn setup<S: absorber_core::Scene, const D: usize, const DR: usize>(
     ))
 }
 
-/// The noise model (module doc of [`filter`]): under a tip force with the design load's
-/// spectrum ([`filter::surrogate`] of `design`, seeded: not the study's force), the locked-ball
+/// The noise model (module doc of [`filter`]): under tip forces with the design load's
+/// spectrum ([`filter::surrogate`] of `design`, the seeded draws of
+/// [`filter::calibration_seeds`] of [`filter::LAB_CALIBRATION_DRAWS`] pooled: not the study's force), the locked-ball
 /// filter on the locked truth gives ε (and, where ε = 0 leaves the innovations smaller than
 /// predicted, the load model's variance scale λ: [`filter::matched_load_scale`]); the
 /// free-ball filter with ε on the free truth gives ε_e near the ball's events (the ball
@@ -266,29 +267,40 @@ fn calibrate_noise(
     let h = pc.integrator.step;
     const SECONDS: f64 = 30.0;
     let steps = (SECONDS / h).round() as usize;
-    let force = filter::surrogate(design, steps, h, 0x5EED);
-    let at = |t: f64| force.get((t / h).round() as usize).copied().unwrap_or(0.0);
     let accel = [SensorKind::TipAccel];
     let category = DetailCategory::EPrime;
-    let t_locked = truth(truth_params, SceneKind::LockedBall, steps, &at)?;
-    let m_locked = measure_for(&t_locked, specs, h)?;
-    // The locked-ball filter on the locked calibration truth with the setup `s`.
+    let forces: Vec<Vec<f64>> = filter::calibration_seeds(filter::LAB_CALIBRATION_DRAWS)
+        .into_iter()
+        .map(|seed| filter::surrogate(design, steps, h, seed))
+        .collect();
+    let at = |f: &[f64], t: f64| f.get((t / h).round() as usize).copied().unwrap_or(0.0);
+    let mut locked_draws = Vec::new();
+    for f in &forces {
+        let t = truth(truth_params, SceneKind::LockedBall, steps, &|x| at(f, x))?;
+        let m = measure_for(&t, specs, h)?;
+        locked_draws.push((t, m));
+    }
+    // The locked-ball filter on the locked calibration truths with the setup `s`, pooled.
     let run_locked = |s: &Setup| -> Result<filter::Excess> {
-        let cfg = filter::config(s, section, &m_locked, &accel)?;
-        let model =
-            Model::<f32, Loaded<LockedBall>, N, { 4 * N }>::at_rest(super::params_f32(pc), 0.0)
-                .map_err(core)?;
-        let r = filter::run::<Loaded<LockedBall>, { 4 * N }, X_NEWMARK>(
-            "locked-ball",
-            model,
-            cfg,
-            &m_locked,
-            &accel,
-            &t_locked,
-            category,
-            h,
-        )?;
-        Ok(r.excess)
+        let mut runs = Vec::new();
+        for (t, m) in &locked_draws {
+            let cfg = filter::config(s, section, m, &accel)?;
+            let model =
+                Model::<f32, Loaded<LockedBall>, N, { 4 * N }>::at_rest(super::params_f32(pc), 0.0)
+                    .map_err(core)?;
+            let r = filter::run::<Loaded<LockedBall>, { 4 * N }, X_NEWMARK>(
+                "locked-ball",
+                model,
+                cfg,
+                m,
+                &accel,
+                t,
+                category,
+                h,
+            )?;
+            runs.push(r.excess);
+        }
+        Ok(filter::Excess::pooled(runs))
     };
     let eps = filter::matched(|eps| {
         let mut s = *locked;
@@ -306,26 +318,36 @@ fn calibrate_noise(
         locked.load_sd *= lambda.sqrt();
         free.load_sd *= lambda.sqrt();
     }
-    let t_free = truth(truth_params, SceneKind::FreeBall, steps, &at)?;
-    let m_free = measure_for(&t_free, specs, h)?;
+    let mut free_draws = Vec::new();
+    for f in &forces {
+        let t = truth(truth_params, SceneKind::FreeBall, steps, &|x| at(f, x))?;
+        let m = measure_for(&t, specs, h)?;
+        free_draws.push((t, m));
+    }
     free.event_error = filter::matched(|eps_e| {
         let mut s = *free;
         s.event_error = eps_e;
-        let cfg = filter::config(&s, section, &m_free, &accel)?;
-        let model =
-            Model::<f32, Loaded<FreeBall>, N, { 4 * N + 1 }>::at_rest(super::params_f32(pc), 0.0)
-                .map_err(core)?;
-        let r = filter::run::<Loaded<FreeBall>, { 4 * N + 1 }, X_NEWMARK>(
-            "free-ball",
-            model,
-            cfg,
-            &m_free,
-            &accel,
-            &t_free,
-            category,
-            h,
-        )?;
-        Ok(r.excess.event_excess())
+        let mut runs = Vec::new();
+        for (t, m) in &free_draws {
+            let cfg = filter::config(&s, section, m, &accel)?;
+            let model = Model::<f32, Loaded<FreeBall>, N, { 4 * N + 1 }>::at_rest(
+                super::params_f32(pc),
+                0.0,
+            )
+            .map_err(core)?;
+            let r = filter::run::<Loaded<FreeBall>, { 4 * N + 1 }, X_NEWMARK>(
+                "free-ball",
+                model,
+                cfg,
+                m,
+                &accel,
+                t,
+                category,
+                h,
+            )?;
+            runs.push(r.excess);
+        }
+        Ok(filter::Excess::pooled(runs).event_excess())
     })?;
     Ok(())
 }
