@@ -634,6 +634,7 @@ impl<T: Real> Params<T> {
             "calibration.bending_stiffness" => c.bending_stiffness,
             "calibration.axial_stiffness" => c.axial_stiffness,
             "calibration.mass_lumping" => c.mass_lumping,
+            "calibration.bending_gradient" => c.bending_gradient,
             _ => return None,
         })
     }
