@@ -284,20 +284,7 @@ fn calibrate_noise(
     let run_locked = |s: &Setup| -> Result<filter::Excess> {
         let mut runs = Vec::new();
         for (t, m) in &locked_draws {
-            let cfg = filter::config(s, section, m, &accel)?;
-            let model =
-                Model::<f32, Loaded<LockedBall>, N, { 4 * N }>::at_rest(super::params_f32(pc), 0.0)
-                    .map_err(core)?;
-            let r = filter::run::<Loaded<LockedBall>, { 4 * N }, X_NEWMARK>(
-                "locked-ball",
-                model,
-                cfg,
-                m,
-                &accel,
-                t,
-                category,
-                h,
-            )?;
+            let r = run_locked_ball(s, section, super::params_f32(pc), m, t, category, h)?;
             runs.push(r.excess);
         }
         Ok(filter::Excess::pooled(runs))
@@ -354,6 +341,34 @@ fn calibrate_noise(
 
 /// The sensors of `specs` on a lab truth, at rest for its first [`filter::QUIET`] seconds
 /// (the first episode ramps up from 2 s).
+/// The locked-ball filter on the tip accelerometer (the model without the ball's motion, set up
+/// by `setup`) run on one truth and its measurements: the study's baseline and the noise
+/// calibration's runs.
+fn run_locked_ball(
+    setup: &Setup,
+    section: &RootSection<f64>,
+    params: Params<f32>,
+    measured: &Measured,
+    truth: &Truth,
+    category: DetailCategory,
+    h: f64,
+) -> Result<filter::Run> {
+    let accel = [SensorKind::TipAccel];
+    let cfg = filter::config(setup, section, measured, &accel)?;
+    let model =
+        Model::<f32, Loaded<LockedBall>, N, { 4 * N }>::at_rest(params, 0.0).map_err(core)?;
+    filter::run::<Loaded<LockedBall>, { 4 * N }, X_NEWMARK>(
+        "locked-ball",
+        model,
+        cfg,
+        measured,
+        &accel,
+        truth,
+        category,
+        h,
+    )
+}
+
 fn measure_for(truth: &Truth, specs: &[SensorSpec], h: f64) -> Result<Measured> {
     filter::measure(truth, specs, h, (filter::QUIET / h).round() as usize)
 }
@@ -512,20 +527,8 @@ pub fn lab_member(
         estimates.push(r.stress);
     }
     if has(SensorKind::TipAccel) {
-        let accel = [SensorKind::TipAccel];
         for (t, m) in [(&free, &m_free), (&locked, &m_locked)] {
-            let cfg = filter::config(&s_locked, &section, m, &accel)?;
-            let model = Model::<f32, Loaded<LockedBall>, N, L>::at_rest(p32, 0.0).map_err(core)?;
-            let r = filter::run::<Loaded<LockedBall>, L, X_NEWMARK>(
-                "locked-ball",
-                model,
-                cfg,
-                m,
-                &accel,
-                t,
-                category,
-                h,
-            )?;
+            let r = run_locked_ball(&s_locked, &section, p32, m, t, category, h)?;
             estimators.push(r.report);
             estimates.push(r.stress);
         }
