@@ -205,6 +205,41 @@ impl<T: Real> Beam<T> {
         self.add_element_residual(k, &u, (&ue, &ae), &axial, applied, r);
     }
 
+    /// Adds element `k`'s Newton matrix along `ch` into `jac`, the block of
+    /// [`Beam::element_residual_and_jacobian`] without the residual. Where `c_q = 0` (the
+    /// estimator's `∂r/∂v`) the axial tangent is left out: its terms there are `0 · K_l`, and the
+    /// band holds the same numbers.
+    pub fn add_element_jacobian<const D: usize>(
+        &self,
+        k: usize,
+        q: &SVector<T, D>,
+        ch: &Chain<T>,
+        jac: &mut BandMatrix<T, D>,
+    ) {
+        let linear = self.linear_newton4(ch);
+        let mut block = [[T::zero(); 8]; 8];
+        if ch.c_q == T::zero() {
+            // `linear ⊗ I₂`: the entries `tangent_block` writes with a zero scale.
+            for (rows, lin) in block.chunks_exact_mut(2).zip(linear.iter()) {
+                if let [row_x, row_y] = rows {
+                    let pairs = row_x.chunks_exact_mut(2).zip(row_y.chunks_exact_mut(2));
+                    for ((px, py), l) in pairs.zip(lin.iter()) {
+                        if let ([x0, _], [_, y1]) = (px, py) {
+                            *x0 = *l;
+                            *y1 = *l;
+                        }
+                    }
+                }
+            }
+        } else {
+            let u = gather(q, k);
+            self.quadrature
+                .tangent_block(&u, &linear, ch.c_q, &mut block);
+        }
+        let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
+        jac.add_block8(first, skip, &block);
+    }
+
     /// Adds the beam's residual into `r` and its Newton matrix along the chain `ch` into `jac`:
     /// per element `(c_m M₄ + (c_q + c_v c) K₄) ⊗ I₂ + c_q K_l`, built as one 8×8 block and
     /// added to the band row by row.

@@ -895,7 +895,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         let s = *model.state();
         let g_eff = model.sys.effective_gravity(s.base_accel);
         let rec = self.rec;
-        let mut r = SVector::<T, D>::zeros();
         if !model.work.has_factors(rec.c_q, s.contact) {
             // An event step ended with another matrix (a sub-step's, or another contact's):
             // factor the step's own at its end.
@@ -913,6 +912,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 contact: s.contact,
                 plumb: false,
             };
+            let mut r = SVector::<T, D>::zeros();
             model
                 .sys
                 .refresh_at(&p, [&s.q, &s.v, &s.a], &mut model.work, &mut r)?;
@@ -931,15 +931,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             (0usize, unit(T::one(), T::zero())),
             (M, unit(T::zero(), T::one())),
         ] {
-            model.sys.residual_and_jacobian(
-                [&s.q, &s.v, &s.a],
-                g_eff,
-                &ch,
-                s.contact,
-                false,
-                &mut r,
-                &mut self.scratch,
-            );
+            model
+                .sys
+                .jacobian([&s.q, &s.v, &s.a], g_eff, &ch, s.contact, &mut self.scratch);
             // The products on the band (the same sums as the dense product, in the same order,
             // without the terms outside the band, which are exact zeros).
             let mut rphi = SMatrix::<T, D, M>::zeros();
