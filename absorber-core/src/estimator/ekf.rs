@@ -1196,9 +1196,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         for k in 0..KINDS {
             f[(off + k, off + k)] = T::one();
         }
+        // Only F's nonzero entries (a zero stays zero; its sign is never read: F's entries
+        // enter below only as nonzero factors).
         for i in 0..X {
             for j in 0..X {
-                f[(i, j)] *= self.scale[j] / self.scale[i];
+                if f[(i, j)] != T::zero() {
+                    f[(i, j)] *= self.scale[j] / self.scale[i];
+                }
             }
         }
         // Noise columns (scaled) and their variances: the first `n` columns of `w2`.
@@ -1245,17 +1249,25 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         if matches!(S::BALL, BallKind::Free) {
             if let Some((a, u)) = self.ball_direction(model) {
-                let (aq, av) = (embed::<T, M, X>(&a, 0), embed::<T, M, X>(&a, M));
                 let (uq, uv) = (embed::<T, M, X>(&u, 0), embed::<T, M, X>(&u, M));
-                // Rank-one maps I − c u aᵀ, applied to F (scaled: ũ = T⁻¹u, ã = T a).
-                let mut map = |u: &SVector<T, X>, a: &SVector<T, X>, c: T| {
-                    let ut = u.component_div(&self.scale);
-                    let at = a.component_mul(&self.scale);
-                    let atf = f.transpose() * at;
-                    // f −= (ũ (Fᵀã)ᵀ) c, entry by entry (no temporary matrices).
-                    for (col, bj) in f.as_mut_slice().chunks_exact_mut(X).zip(atf.iter()) {
-                        for (x, ui) in col.iter_mut().zip(ut.iter()) {
-                            *x -= *ui * *bj * c;
+                // Rank-one maps I − c u aᵀ on the block of rows `at..at + M` (the positions' or
+                // the velocities'), applied to F (scaled: ũ = T⁻¹u, ã = T a): `u` and `a` are
+                // zero elsewhere, so only that block's entries of `Fᵀã` have nonzero terms
+                // (summed in row order, as the full product sums them) and only its rows move.
+                let scale = &self.scale;
+                let mut map = |at: usize, c: T| {
+                    let s = scale.as_slice().get(at..at + M).unwrap_or(&[]);
+                    for col in f.as_mut_slice().chunks_exact_mut(X) {
+                        let Some(col) = col.get_mut(at..at + M) else {
+                            continue;
+                        };
+                        // (Fᵀã)_j over the block, then f −= ũ (Fᵀã)_j c.
+                        let mut bj = T::zero();
+                        for ((x, ak), sk) in col.iter().zip(a.iter()).zip(s.iter()) {
+                            bj += *ak * *sk * *x;
+                        }
+                        for ((x, uk), sk) in col.iter_mut().zip(u.iter()).zip(s.iter()) {
+                            *x -= *uk / *sk * bj * c;
                         }
                     }
                 };
@@ -1263,19 +1275,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                     // The relative rate's error reverses like the rate: v ← v − (1 + e) u (a·v),
                     // and the rebound speed's uncertainty is added.
                     let e = model.params().ball.restitution;
-                    map(&uv, &av, T::one() + e);
+                    map(M, T::one() + e);
                     let sd = self.config.impact_sd * imp.relative_speed.abs();
                     push(uv.component_div(&self.scale), sd * sd, &mut self.w2);
                 }
                 if !ball_free {
                     // Held or flying: the relative angle is the model's; its error leaves the
                     // subspace.
-                    map(&uq, &aq, T::one());
-                    map(&uv, &av, T::one());
+                    map(0, T::one());
+                    map(M, T::one());
                 } else if ball_event && report.impact.is_none() {
                     // Landed or released: the relative angle and rate restart with their prior.
-                    map(&uq, &aq, T::one());
-                    map(&uv, &av, T::one());
+                    map(0, T::one());
+                    map(M, T::one());
                     let [sa, sr] = self.config.ball_restart_sd;
                     push(uq.component_div(&self.scale), sa * sa, &mut self.w2);
                     push(uv.component_div(&self.scale), sr * sr, &mut self.w2);
