@@ -1319,11 +1319,26 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             }
             n1 += 1;
         }
-        let ft = f.transpose();
+        // F's nonzero entries of row i lie in columns `lo..=hi`: the modal rows' in the modal
+        // columns and the load's, the load's block's in that block, a bias's on the diagonal
+        // (the entries outside are never written, and the ball's maps move only modal rows,
+        // by multiples of modal rows). F is read in place, column-major.
+        let fs = f.as_slice();
         self.w1 = [[T::zero(); X]; X];
-        for (row, fi) in self.w1.iter_mut().zip(ft.as_slice().chunks_exact(X)) {
+        for (i, row) in self.w1.iter_mut().enumerate() {
             let row = row.get_mut(..n1).unwrap_or(&mut []);
-            for ((fik, uk), fk) in fi.iter().zip(ur.iter()).zip(first.iter()) {
+            let (lo, hi) = if i < ld {
+                (0, ld)
+            } else if i < off {
+                (ld, off - 1)
+            } else {
+                (i, i)
+            };
+            for k in lo..=hi {
+                let (Some(fik), Some(uk), Some(fk)) = (fs.get(k * X + i), ur.get(k), first.get(k))
+                else {
+                    continue;
+                };
                 if *fik != T::zero() {
                     let (Some(x), Some(y)) = (row.get_mut(*fk..), uk.get(*fk..)) else {
                         continue;
