@@ -361,27 +361,6 @@ fn backward_dot<T: Real, const W: usize>(row: &[T; WIDTH], x: &[T], i: usize) ->
     }
 }
 
-/// `Σ_k a_k b_k` over the shorter of the two slices, summed in index order from zero (four
-/// terms per pass: the same sums as one at a time, fewer loop instructions).
-pub(crate) fn dot_in_order<T: Real>(a: &[T], b: &[T]) -> T {
-    let n = a.len().min(b.len());
-    let (a, b) = (a.get(..n).unwrap_or(&[]), b.get(..n).unwrap_or(&[]));
-    let (mut ca, mut cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let mut s = T::zero();
-    for (x, y) in (&mut ca).zip(&mut cb) {
-        if let ([x0, x1, x2, x3], [y0, y1, y2, y3]) = (x, y) {
-            s += *x0 * *y0;
-            s += *x1 * *y1;
-            s += *x2 * *y2;
-            s += *x3 * *y3;
-        }
-    }
-    for (x, y) in ca.remainder().iter().zip(cb.remainder().iter()) {
-        s += *x * *y;
-    }
-    s
-}
-
 /// `x[start .. start + W]` as a fixed window, if it lies inside `x`.
 #[inline(always)]
 fn window<T, const W: usize>(x: &[T], start: usize) -> Option<&[T; W]> {
@@ -390,7 +369,7 @@ fn window<T, const W: usize>(x: &[T], start: usize) -> Option<&[T; W]> {
 
 /// `Σ a_k b_k` over fixed windows (unrolled), summed in index order.
 #[inline(always)]
-fn dot<T: Real, const W: usize>(a: &[T; W], b: &[T; W]) -> T {
+pub(crate) fn dot<T: Real, const W: usize>(a: &[T; W], b: &[T; W]) -> T {
     let mut s = T::zero();
     for (x, y) in a.iter().zip(b.iter()) {
         s += *x * *y;

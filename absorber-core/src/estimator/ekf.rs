@@ -43,7 +43,7 @@ use super::basis::ModalBasis;
 use super::health::{Health, HealthConfig, Verdict};
 use super::sensors::{ReadingUse, Readings, SensorKind, SensorSet, KINDS};
 use crate::error::Error;
-use crate::linalg::BandMatrix;
+use crate::linalg::{dot, BandMatrix};
 use crate::loads::{Loads, MAX_LOAD};
 use crate::model::{Contact, Model, StepReport};
 use crate::monitor::stress::{root_reaction_moment, static_root_moment, RootSection};
@@ -1205,7 +1205,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 }
             }
         }
-        // Noise columns (scaled) and their variances: the first `n` columns of `w2`.
+        // Noise columns (scaled) and their variances: the first `n` columns of `w2`, the others
+        // zero (Thornton's windows read them).
+        self.w2 = [[T::zero(); NOISE]; X];
         let mut q = [T::zero(); NOISE];
         let mut n = 0;
         let mut push = |col: SVector<T, X>, var: T, w2: &mut [[T; NOISE]; X]| {
@@ -1507,7 +1509,15 @@ fn bierman_f<T: Real, const X: usize>(
 /// Thornton's modified weighted Gram–Schmidt time update: `U D Uᵀ = W₁ D₁ W₁ᵀ + W₂ Q W₂ᵀ`
 /// (rows of `W = [W₁ W₂]` orthogonalized from the last up, in the weights `diag(D₁, Q)`).
 /// `W₁`, `W₂` are given by rows, of which the first `n1` and `n2` columns count (columns of
-/// zero weight add nothing and are left out); they are overwritten.
+/// zero weight add nothing and are left out); they are overwritten. The columns beyond `n1`
+/// and `n2` must be zero.
+///
+/// Each step's sums and updates run over fixed windows of the rows ([`thornton_step`]): the
+/// window of `W₁` covers the pivot row's nonzero entries (from its first nonzero, the load's
+/// and the biases' rows of F U start at the load's column, and the rows below only remove
+/// such rows, to `n1`), that of `W₂` its first `n2` columns. The entries the window adds
+/// beyond those are exact zeros of the pivot row, so every sum takes the same nonzero terms in
+/// the same order as over the used entries alone, with fewer loop instructions.
 #[allow(clippy::too_many_arguments)]
 fn thornton<T: Real, const X: usize, const Q: usize>(
     w1: &mut [[T; X]; X],
@@ -1520,55 +1530,99 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
     d: &mut SVector<T, X>,
 ) {
     u.as_mut_slice().fill(T::zero());
-    // The weighted row of each step below (its used entries written before they are read).
-    let mut v1 = [T::zero(); X];
-    let mut v2 = [T::zero(); Q];
     for j in (0..X).rev() {
-        let (up1, rest1) = w1.split_at_mut(j);
-        let (up2, rest2) = w2.split_at_mut(j);
-        let (Some(wj1), Some(wj2)) = (rest1.first(), rest2.first()) else {
+        let Some(wj1) = w1.get(j) else {
             continue;
         };
-        let (wj1, wj2) = (wj1.get(..n1).unwrap_or(wj1), wj2.get(..n2).unwrap_or(wj2));
-        // Its leading zeros (the load's and the biases' rows of F U start at the load's
-        // column, and the rows below only remove such rows) are left out of every sum.
+        let wj1 = wj1.get(..n1).unwrap_or(wj1);
         let s1 = wj1
             .iter()
             .position(|x| *x != T::zero())
             .unwrap_or(wj1.len());
-        let wj1 = wj1.get(s1..).unwrap_or(&[]);
-        // The weighted row `w_jk weight_k`: D_j = Σ_k w_jk² weight_k, and its products with
-        // the rows above, divided by D_j, give U's column j.
-        for ((v, w), a) in v1.iter_mut().zip(wj1.iter()).zip(d1.iter().skip(s1)) {
-            *v = *w * *a;
-        }
-        for ((v, w), a) in v2.iter_mut().zip(wj2.iter()).zip(q.iter()) {
-            *v = *w * *a;
-        }
-        let (v1, v2) = (
-            v1.get(..wj1.len()).unwrap_or(&v1),
-            v2.get(..n2).unwrap_or(&v2),
-        );
-        let dj = dot(wj1, v1) + dot(wj2, v2);
-        if let Some(x) = u.get_mut((j, j)) {
-            *x = T::one();
-        }
+        let len = wj1.len() - s1;
+        // The narrowest window that holds the used entries (`len` from `s1`).
+        let narrow = len <= 4 && X >= 4;
+        let wide2 = n2 > 4 || Q < 4;
+        let dj = match (narrow, wide2) {
+            (true, false) => thornton_step::<T, X, Q, 4, 4>(w1, d1, s1, w2, q, j, u),
+            (true, true) => thornton_step::<T, X, Q, 4, Q>(w1, d1, s1, w2, q, j, u),
+            (false, false) => thornton_step::<T, X, Q, X, 4>(w1, d1, s1, w2, q, j, u),
+            (false, true) => thornton_step::<T, X, Q, X, Q>(w1, d1, s1, w2, q, j, u),
+        };
         if let Some(x) = d.get_mut(j) {
             *x = if is_positive(dj) { dj } else { T::zero() };
         }
-        if !is_positive(dj) {
+    }
+}
+
+/// Step `j` of [`thornton`] over a window of `A` columns of `W₁` (from `s1`, moved left to fit
+/// in the row; the entries left of `s1` are the pivot row's leading zeros) and the first `B`
+/// of `W₂`: `D_j = Σ_k w_jk² weight_k`, then for every row above `U_ij = (w_i · v_j) / D_j`
+/// and `w_i −= U_ij w_j` (`v_j` the weighted pivot row). Returns `D_j`; nothing changes but
+/// `U_jj = 1` if it is not positive.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn thornton_step<T: Real, const X: usize, const Q: usize, const A: usize, const B: usize>(
+    w1: &mut [[T; X]; X],
+    d1: &[T; X],
+    s1: usize,
+    w2: &mut [[T; Q]; X],
+    q: &[T; Q],
+    j: usize,
+    u: &mut SMatrix<T, X, X>,
+) -> T {
+    let a = s1.min(X.saturating_sub(A));
+    let (up1, rest1) = w1.split_at_mut(j);
+    let (up2, rest2) = w2.split_at_mut(j);
+    let (Some(wj1), Some(wj2), Some(d1)) = (
+        rest1
+            .first()
+            .and_then(|r| r.get(a..))
+            .and_then(|r| r.first_chunk::<A>()),
+        rest2.first().and_then(|r| r.first_chunk::<B>()),
+        d1.get(a..).and_then(|r| r.first_chunk::<A>()),
+    ) else {
+        return T::zero();
+    };
+    let Some(q) = q.first_chunk::<B>() else {
+        return T::zero();
+    };
+    // The weighted row `w_jk weight_k`.
+    let mut v1 = [T::zero(); A];
+    for ((v, w), x) in v1.iter_mut().zip(wj1.iter()).zip(d1.iter()) {
+        *v = *w * *x;
+    }
+    let mut v2 = [T::zero(); B];
+    for ((v, w), x) in v2.iter_mut().zip(wj2.iter()).zip(q.iter()) {
+        *v = *w * *x;
+    }
+    let dj = dot(wj1, &v1) + dot(wj2, &v2);
+    if let Some(x) = u.get_mut((j, j)) {
+        *x = T::one();
+    }
+    if !is_positive(dj) {
+        return dj;
+    }
+    for (i, (wi1, wi2)) in up1.iter_mut().zip(up2.iter_mut()).enumerate() {
+        let (Some(x1), Some(x2)) = (
+            wi1.get_mut(a..).and_then(|r| r.first_chunk_mut::<A>()),
+            wi2.first_chunk_mut::<B>(),
+        ) else {
             continue;
+        };
+        let uij = (dot(x1, &v1) + dot(x2, &v2)) / dj;
+        if let Some(x) = u.get_mut((i, j)) {
+            *x = uij;
         }
-        for (i, (wi1, wi2)) in up1.iter_mut().zip(up2.iter_mut()).enumerate() {
-            let wi1 = wi1.get_mut(s1..).unwrap_or(&mut []);
-            let uij = (dot(wi1, v1) + dot(wi2, v2)) / dj;
-            if let Some(x) = u.get_mut((i, j)) {
-                *x = uij;
-            }
-            axpy(wi1, -uij, wj1);
-            axpy(wi2, -uij, wj2);
+        let c = -uij;
+        for (x, y) in x1.iter_mut().zip(wj1.iter()) {
+            *x += c * *y;
+        }
+        for (x, y) in x2.iter_mut().zip(wj2.iter()) {
+            *x += c * *y;
         }
     }
+    dj
 }
 
 /// Column `j` of `m`, owned, read through its storage (a column view's arithmetic reaches a
@@ -1599,12 +1653,7 @@ fn set_column<T: Real, const R: usize, const C: usize>(
     }
 }
 
-/// `Σ_k a_k b_k` over the shorter of the two slices, in order.
-fn dot<T: Real>(a: &[T], b: &[T]) -> T {
-    crate::linalg::dot_in_order(a, b)
-}
-
-/// `a_k += c b_k` over the shorter of the two slices (four per pass, as [`dot`]).
+/// `a_k += c b_k` over the shorter of the two slices (four per pass).
 fn axpy<T: Real>(a: &mut [T], c: T, b: &[T]) {
     let n = a.len().min(b.len());
     let (a, b) = (a.get_mut(..n).unwrap_or(&mut []), b.get(..n).unwrap_or(&[]));
