@@ -137,7 +137,8 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
     }
 
     /// `Y = J X`: for every column the sums of [`BandMatrix::mul_vec`], in the same order; the
-    /// columns advance together (`X` read by rows), one pass over the band.
+    /// columns advance together (`X` read by rows), one pass over the node envelope (the
+    /// matrix's assembled structure: a Newton matrix along any chain).
     pub fn mul_mat<const K: usize>(&self, x: &SMatrix<T, D, K>, y: &mut SMatrix<T, D, K>) {
         let mut xr = [[T::zero(); K]; D];
         for (c, col) in x.as_slice().chunks_exact(D).enumerate() {
@@ -148,17 +149,19 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
             }
         }
         for (i, row) in self.rows.iter().enumerate() {
-            let (lo, skip) = match i.checked_sub(BAND) {
-                Some(lo) => (lo, 0),
-                None => (0, BAND - i),
+            // Row i's node envelope (module doc): the columns of nodes i/4 − 1 … i/4 + 1, a
+            // fixed window per width (8 in the first node's rows, 12 inside, 9 in the last
+            // node's, 5 in the spin's). The band's other entries are exact zeros, whose terms
+            // change no sum.
+            let first = i / NODE * NODE;
+            let lo = first.saturating_sub(NODE);
+            let s = match (first + 2 * NODE).min(D) - lo {
+                12 => envelope_row::<T, D, K, 12>(row, &xr, lo + BAND - i, lo),
+                9 => envelope_row::<T, D, K, 9>(row, &xr, lo + BAND - i, lo),
+                8 => envelope_row::<T, D, K, 8>(row, &xr, lo + BAND - i, lo),
+                5 => envelope_row::<T, D, K, 5>(row, &xr, lo + BAND - i, lo),
+                _ => envelope_row_any(row, &xr, BAND.saturating_sub(i), i.saturating_sub(BAND)),
             };
-            let mut s = [T::zero(); K];
-            let (r, xw) = (row.get(skip..).unwrap_or(&[]), xr.get(lo..).unwrap_or(&[]));
-            for (a, xk) in r.iter().zip(xw.iter()) {
-                for (sc, v) in s.iter_mut().zip(xk.iter()) {
-                    *sc += *a * *v;
-                }
-            }
             for (c, sc) in s.iter().enumerate() {
                 if let Some(yi) = y.get_mut((i, c)) {
                     *yi = *sc;
@@ -359,6 +362,47 @@ fn backward_dot<T: Real, const W: usize>(row: &[T; WIDTH], x: &[T], i: usize) ->
         (Some(u), Some(next)) => dot(u, next),
         _ => T::zero(),
     }
+}
+
+/// `Σ_k row[at + k] x[from + k]` for every column of `x` (given by rows) over a window of
+/// `W`, summed in index order from zero (zero if the window does not fit).
+#[inline(always)]
+fn envelope_row<T: Real, const D: usize, const K: usize, const W: usize>(
+    row: &[T; WIDTH],
+    x: &[[T; K]; D],
+    at: usize,
+    from: usize,
+) -> [T; K] {
+    let mut s = [T::zero(); K];
+    let (Some(r), Some(xw)) = (
+        row.get(at..).and_then(|r| r.first_chunk::<W>()),
+        x.get(from..).and_then(|x| x.first_chunk::<W>()),
+    ) else {
+        return s;
+    };
+    for (a, xk) in r.iter().zip(xw.iter()) {
+        for (sc, v) in s.iter_mut().zip(xk.iter()) {
+            *sc += *a * *v;
+        }
+    }
+    s
+}
+
+/// [`envelope_row`] over the rest of the band row (a narrow matrix's rows).
+fn envelope_row_any<T: Real, const D: usize, const K: usize>(
+    row: &[T; WIDTH],
+    x: &[[T; K]; D],
+    at: usize,
+    from: usize,
+) -> [T; K] {
+    let mut s = [T::zero(); K];
+    let (r, xw) = (row.get(at..).unwrap_or(&[]), x.get(from..).unwrap_or(&[]));
+    for (a, xk) in r.iter().zip(xw.iter()) {
+        for (sc, v) in s.iter_mut().zip(xk.iter()) {
+            *sc += *a * *v;
+        }
+    }
+    s
 }
 
 /// `x[start .. start + W]` as a fixed window, if it lies inside `x`.
