@@ -1297,18 +1297,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             }
         }
         // W₁ = F U by rows, only its columns of positive weight (the others add nothing to
-        // U D Uᵀ); U is unit upper triangular, so column k of F U takes F's columns 0..=k.
-        // U's rows restricted to those columns, then each row of F U as the sum of the rows of
-        // U that F's nonzero entries of that row pick, in order (F is sparse: 2M + 1 entries
-        // in a modal row, at most three in the load's and one in a bias's).
+        // U D Uᵀ): U's rows restricted to those columns, then each row of F U as the sum of
+        // the rows of U that F's nonzero entries of that row pick, in order (F is sparse: 2M + 1
+        // entries in a modal row, at most three in the load's and one in a bias's), over whole
+        // rows (U is unit upper triangular: a row's entries left of its diagonal, and the
+        // columns beyond the kept ones, are exact zeros and change no sum).
         let mut d1 = [T::zero(); X];
         let mut ur = [[T::zero(); X]; X];
-        // Row k of U is zero left of its diagonal: in the kept columns, before `first[k]`.
-        let mut first = [0usize; X];
         let mut n1 = 0;
         let columns = self.ud_u.as_slice().chunks_exact(X);
-        for ((uk, dk), fk) in columns.zip(self.ud_d.iter()).zip(first.iter_mut()) {
-            *fk = n1;
+        for (uk, dk) in columns.zip(self.ud_d.iter()) {
             if !is_positive(*dk) {
                 continue;
             }
@@ -1326,9 +1324,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // (the entries outside are never written, and the ball's maps move only modal rows,
         // by multiples of modal rows). F is read in place, column-major.
         let fs = f.as_slice();
-        self.w1 = [[T::zero(); X]; X];
         for (i, row) in self.w1.iter_mut().enumerate() {
-            let row = row.get_mut(..n1).unwrap_or(&mut []);
             let (lo, hi) = if i < ld {
                 (0, ld)
             } else if i < off {
@@ -1336,18 +1332,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             } else {
                 (i, i)
             };
+            let mut acc = [T::zero(); X];
             for k in lo..=hi {
-                let (Some(fik), Some(uk), Some(fk)) = (fs.get(k * X + i), ur.get(k), first.get(k))
-                else {
+                let (Some(fik), Some(uk)) = (fs.get(k * X + i), ur.get(k)) else {
                     continue;
                 };
                 if *fik != T::zero() {
-                    let (Some(x), Some(y)) = (row.get_mut(*fk..), uk.get(*fk..)) else {
-                        continue;
-                    };
-                    axpy(x, *fik, y);
+                    for (x, y) in acc.iter_mut().zip(uk.iter()) {
+                        *x += *fik * *y;
+                    }
                 }
             }
+            *row = acc;
         }
         thornton(
             &mut self.w1,
@@ -1650,25 +1646,6 @@ fn set_column<T: Real, const R: usize, const C: usize>(
         for (x, y) in c.iter_mut().zip(v.iter()) {
             *x = *y;
         }
-    }
-}
-
-/// `a_k += c b_k` over the shorter of the two slices (four per pass).
-fn axpy<T: Real>(a: &mut [T], c: T, b: &[T]) {
-    let n = a.len().min(b.len());
-    let (a, b) = (a.get_mut(..n).unwrap_or(&mut []), b.get(..n).unwrap_or(&[]));
-    let mut ca = a.chunks_exact_mut(4);
-    let mut cb = b.chunks_exact(4);
-    for (x, y) in (&mut ca).zip(&mut cb) {
-        if let ([x0, x1, x2, x3], [y0, y1, y2, y3]) = (x, y) {
-            *x0 += c * *y0;
-            *x1 += c * *y1;
-            *x2 += c * *y2;
-            *x3 += c * *y3;
-        }
-    }
-    for (x, y) in ca.into_remainder().iter_mut().zip(cb.remainder().iter()) {
-        *x += c * *y;
     }
 }
 
