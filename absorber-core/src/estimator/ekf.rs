@@ -1198,10 +1198,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         // Only F's nonzero entries (a zero stays zero; its sign is never read: F's entries
         // enter below only as nonzero factors).
-        for i in 0..X {
-            for j in 0..X {
-                if f[(i, j)] != T::zero() {
-                    f[(i, j)] *= self.scale[j] / self.scale[i];
+        for (j, col) in f.as_mut_slice().chunks_exact_mut(X).enumerate() {
+            let sj = self.scale[j];
+            for (x, si) in col.iter_mut().zip(self.scale.iter()) {
+                if *x != T::zero() {
+                    *x *= sj / *si;
                 }
             }
         }
