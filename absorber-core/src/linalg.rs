@@ -140,6 +140,35 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
     /// columns advance together (`X` read by rows), one pass over the node envelope (the
     /// matrix's assembled structure: a Newton matrix along any chain).
     pub fn mul_mat<const K: usize>(&self, x: &SMatrix<T, D, K>, y: &mut SMatrix<T, D, K>) {
+        let mut z = [T::zero(); 0];
+        self.mul_rows::<K, false>(x, &[T::zero(); D], y, &mut z);
+    }
+
+    /// [`BandMatrix::mul_mat`] and [`BandMatrix::mul_vec`] of one more vector, `z = J v`, in
+    /// the same pass (each with its own sums, in the same order).
+    pub fn mul_mat_vec<const K: usize>(
+        &self,
+        x: &SMatrix<T, D, K>,
+        v: &SVector<T, D>,
+        y: &mut SMatrix<T, D, K>,
+        z: &mut SVector<T, D>,
+    ) {
+        let mut vr = [T::zero(); D];
+        for (a, b) in vr.iter_mut().zip(v.iter()) {
+            *a = *b;
+        }
+        self.mul_rows::<K, true>(x, &vr, y, z.as_mut_slice());
+    }
+
+    /// The pass of [`BandMatrix::mul_mat_vec`]; with `V` false `v` is not read and `z` not
+    /// written.
+    fn mul_rows<const K: usize, const V: bool>(
+        &self,
+        x: &SMatrix<T, D, K>,
+        v: &[T; D],
+        y: &mut SMatrix<T, D, K>,
+        z: &mut [T],
+    ) {
         let mut xr = [[T::zero(); K]; D];
         for (c, col) in x.as_slice().chunks_exact(D).enumerate() {
             for (row, v) in xr.iter_mut().zip(col.iter()) {
@@ -155,16 +184,28 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
             // change no sum.
             let first = i / NODE * NODE;
             let lo = first.saturating_sub(NODE);
-            let s = match (first + 2 * NODE).min(D) - lo {
-                12 => envelope_row::<T, D, K, 12>(row, &xr, lo + BAND - i, lo),
-                9 => envelope_row::<T, D, K, 9>(row, &xr, lo + BAND - i, lo),
-                8 => envelope_row::<T, D, K, 8>(row, &xr, lo + BAND - i, lo),
-                5 => envelope_row::<T, D, K, 5>(row, &xr, lo + BAND - i, lo),
-                _ => envelope_row_any(row, &xr, BAND.saturating_sub(i), i.saturating_sub(BAND)),
+            let at = lo + BAND - i;
+            let (s, sv) = match (first + 2 * NODE).min(D) - lo {
+                12 => envelope_row::<T, D, K, 12, V>(row, &xr, v, at, lo),
+                9 => envelope_row::<T, D, K, 9, V>(row, &xr, v, at, lo),
+                8 => envelope_row::<T, D, K, 8, V>(row, &xr, v, at, lo),
+                5 => envelope_row::<T, D, K, 5, V>(row, &xr, v, at, lo),
+                _ => envelope_row_any::<T, D, K, V>(
+                    row,
+                    &xr,
+                    v,
+                    BAND.saturating_sub(i),
+                    i.saturating_sub(BAND),
+                ),
             };
             for (c, sc) in s.iter().enumerate() {
                 if let Some(yi) = y.get_mut((i, c)) {
                     *yi = *sc;
+                }
+            }
+            if V {
+                if let Some(zi) = z.get_mut(i) {
+                    *zi = sv;
                 }
             }
         }
@@ -365,44 +406,57 @@ fn backward_dot<T: Real, const W: usize>(row: &[T; WIDTH], x: &[T], i: usize) ->
 }
 
 /// `Σ_k row[at + k] x[from + k]` for every column of `x` (given by rows) over a window of
-/// `W`, summed in index order from zero (zero if the window does not fit).
+/// `W`, and with `V` the same sum for `v`, each in index order from zero (zero if the window
+/// does not fit).
 #[inline(always)]
-fn envelope_row<T: Real, const D: usize, const K: usize, const W: usize>(
+fn envelope_row<T: Real, const D: usize, const K: usize, const W: usize, const V: bool>(
     row: &[T; WIDTH],
     x: &[[T; K]; D],
+    v: &[T; D],
     at: usize,
     from: usize,
-) -> [T; K] {
+) -> ([T; K], T) {
     let mut s = [T::zero(); K];
-    let (Some(r), Some(xw)) = (
+    let mut sv = T::zero();
+    let (Some(r), Some(xw), Some(vw)) = (
         row.get(at..).and_then(|r| r.first_chunk::<W>()),
         x.get(from..).and_then(|x| x.first_chunk::<W>()),
+        v.get(from..).and_then(|v| v.first_chunk::<W>()),
     ) else {
-        return s;
+        return (s, sv);
     };
-    for (a, xk) in r.iter().zip(xw.iter()) {
-        for (sc, v) in s.iter_mut().zip(xk.iter()) {
-            *sc += *a * *v;
+    for ((a, xk), vk) in r.iter().zip(xw.iter()).zip(vw.iter()) {
+        for (sc, y) in s.iter_mut().zip(xk.iter()) {
+            *sc += *a * *y;
+        }
+        if V {
+            sv += *a * *vk;
         }
     }
-    s
+    (s, sv)
 }
 
 /// [`envelope_row`] over the rest of the band row (a narrow matrix's rows).
-fn envelope_row_any<T: Real, const D: usize, const K: usize>(
+fn envelope_row_any<T: Real, const D: usize, const K: usize, const V: bool>(
     row: &[T; WIDTH],
     x: &[[T; K]; D],
+    v: &[T; D],
     at: usize,
     from: usize,
-) -> [T; K] {
+) -> ([T; K], T) {
     let mut s = [T::zero(); K];
+    let mut sv = T::zero();
     let (r, xw) = (row.get(at..).unwrap_or(&[]), x.get(from..).unwrap_or(&[]));
-    for (a, xk) in r.iter().zip(xw.iter()) {
-        for (sc, v) in s.iter_mut().zip(xk.iter()) {
-            *sc += *a * *v;
+    let vw = v.get(from..).unwrap_or(&[]);
+    for ((a, xk), vk) in r.iter().zip(xw.iter()).zip(vw.iter()) {
+        for (sc, y) in s.iter_mut().zip(xk.iter()) {
+            *sc += *a * *y;
+        }
+        if V {
+            sv += *a * *vk;
         }
     }
-    s
+    (s, sv)
 }
 
 /// `x[start .. start + W]` as a fixed window, if it lies inside `x`.

@@ -936,15 +936,22 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 .jacobian([&s.q, &s.v, &s.a], g_eff, &ch, s.contact, &mut self.scratch);
             // The products on the band (the same sums as the dense product, in the same order,
             // without the terms outside the band, which are exact zeros).
+            // R_q Ψ in the same pass as R_q Φ.
             let mut rphi = SMatrix::<T, D, M>::zeros();
-            self.scratch.mul_mat(&self.consistent, &mut rphi);
+            if block == 0 {
+                self.scratch.mul_mat_vec(
+                    &self.consistent,
+                    &self.residual,
+                    &mut rphi,
+                    &mut load_rhs,
+                );
+            } else {
+                self.scratch.mul_mat(&self.consistent, &mut rphi);
+            }
             for i in 0..M {
                 y = -column(&rphi, i);
                 model.work.solve(&mut y)?;
                 set_column(&mut self.dx, block + i, &y);
-            }
-            if block == 0 {
-                self.scratch.mul_vec(&self.residual, &mut load_rhs);
             }
         }
         // The load: R_P = −e_tip, so J δx = e_tip − R_q Ψ.
