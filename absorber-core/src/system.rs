@@ -6,6 +6,7 @@
 //! the step path borrows it immutably next to the Newton workspace
 //! ([`crate::newton::Workspace`]) and the state.
 
+use crate::ancf::TangentBlocks;
 use crate::beam::Beam;
 use crate::dual::Plain;
 use crate::error::Error;
@@ -328,7 +329,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The Newton matrix `c_m ∂r/∂a + c_v ∂r/∂v + c_q ∂r/∂q` into `jac` (overwritten), the
     /// same numbers as [`System::residual_and_jacobian`] without the residual: the
     /// estimator's `∂r/∂q` and `∂r/∂v` at a step's end. With `c_q = 0` the beam's axial
-    /// tangent is not evaluated ([`Beam::add_element_jacobian`]).
+    /// tangent is not evaluated ([`Beam::add_element_jacobian`]); otherwise the root
+    /// element's tangent blocks are returned (the root stress's gradient needs them).
     #[inline(never)]
     pub(crate) fn jacobian(
         &self,
@@ -337,18 +339,23 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         ch: &Chain<T>,
         contact: Contact,
         jac: &mut BandMatrix<T, D>,
-    ) {
+    ) -> Option<TangentBlocks<T>> {
         jac.clear();
+        let mut root = None;
         for k in 0..N {
             let b = self
                 .data
                 .sections()
                 .and_then(|s| s.get(k))
                 .map_or(&self.beam, |s| &s.beam);
-            b.add_element_jacobian(k, qva[0], ch, jac);
+            let tangent = b.add_element_jacobian(k, qva[0], ch, jac);
+            if k == 0 {
+                root = tangent;
+            }
         }
         let mut r = SVector::<T, D>::zeros();
         self.add_tip_rows(qva, g_eff, ch, contact, false, &mut r, jac);
+        root
     }
 
     /// Element `k`'s matrices and applied force (weight, point masses' weight, line load) of a

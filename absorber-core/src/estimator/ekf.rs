@@ -42,6 +42,7 @@
 use super::basis::ModalBasis;
 use super::health::{Health, HealthConfig, Verdict};
 use super::sensors::{ReadingUse, Readings, SensorKind, SensorSet, KINDS};
+use crate::ancf::TangentBlocks;
 use crate::error::Error;
 use crate::linalg::{dot, BandMatrix};
 use crate::loads::{Loads, MAX_LOAD};
@@ -509,23 +510,46 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         q: &SVector<T, D>,
         g_eff: T,
     ) -> [SVector<T, D>; 3] {
-        const ROW: usize = 3;
         let (b, _) = model.sys.element_and_force(0, g_eff);
         let u = crate::beam::gather(q, 0);
         let mut block = [[T::zero(); 8]; 8];
         let zero4 = [[T::zero(); 4]; 4];
-        b.quadrature.tangent_block(&u, &zero4, T::one(), &mut block);
+        let (_, tangent) = b
+            .quadrature
+            .tangent_block_with(&u, &zero4, T::one(), &mut block);
+        self.stress_gradients_of(model, g_eff, &tangent)
+    }
+
+    /// [`Ekf::stress_gradients`] from element 0's axial tangent blocks at that configuration
+    /// (the `∂r/∂q` assembly's, [`crate::system::System::jacobian`]).
+    fn stress_gradients_of(
+        &self,
+        model: &Model<T, S, N, D>,
+        g_eff: T,
+        tangent: &TangentBlocks<T>,
+    ) -> [SVector<T, D>; 3] {
+        const ROW: usize = 3;
+        let (b, _) = model.sys.element_and_force(0, g_eff);
+        // Row 3 of K_l (the root node's vertical row), columns 4..8, as
+        // `AxialQuadrature::tangent_block` writes it with a zero linear part and unit scale:
+        // `0 + 1 · xy`, `0 + 1 · yy` of blocks (1, 2) and (1, 3).
+        let (zero, one) = (T::zero(), T::one());
+        let kl = |j: usize| -> T {
+            match tangent.get(1).and_then(|r| r.get(j / 2)) {
+                Some([_, xy, yy]) => zero + one * if j % 2 == 0 { *xy } else { *yy },
+                None => zero,
+            }
+        };
         // σ = −M c/I with M = −R₃: dσ = (c/I) dR₃.
         let f = self.config.section.stress_of_moment(-T::one());
         let mut g = [SVector::<T, D>::zeros(); 3];
-        let row = block.get(ROW).copied().unwrap_or([T::zero(); 8]);
-        for (j, kl) in row.iter().enumerate().skip(4) {
+        for j in 4..8 {
             let (m, k) = (b.mass[(ROW, j)], b.stiffness[(ROW, j)]);
             let [gq, gv, ga] = &mut g;
             if let (Some(gq), Some(gv), Some(ga)) =
                 (gq.get_mut(j - 4), gv.get_mut(j - 4), ga.get_mut(j - 4))
             {
-                *gq = f * (k + *kl);
+                *gq = f * (k + kl(j));
                 *gv = f * k * b.damping;
                 *ga = f * m;
             }
@@ -668,7 +692,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         report: StepReport<T>,
     ) -> Result<Estimate<T>, Error> {
         let (ld, off) = (Self::LD, Self::OFF);
-        self.directions(model)?;
+        let root_tangent = self.directions(model)?;
         let contact = model.state().contact;
         // The ball's relative angle is in the filter's subspace only while it rolls off the
         // stops (held on a stop it is fixed; flying, it is the flight state's).
@@ -686,7 +710,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         };
         let near_event = matches!(S::BALL, BallKind::Free)
             && (!ball_free || since_event < self.config.event_window);
-        let rows = self.measurement_rows(model);
+        let rows = self.measurement_rows(model, &root_tangent);
         // The measurement updates, on copies of the factors (committed at the end).
         let (mut u, mut d) = (self.ud_u, self.ud_d);
         let mut delta = SVector::<T, X>::zeros();
@@ -890,8 +914,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     /// The directions of the filter's subspace through the last step: `δx` for each modal
     /// position and velocity error of the predictor and for the load, from the Newton matrix
     /// (factored again at the step's end if the step ended with other factors: an event) and
-    /// `R_q`, `R_v` assembled at the step's end.
-    fn directions(&mut self, model: &mut Model<T, S, N, D>) -> Result<(), Error> {
+    /// `R_q`, `R_v` assembled at the step's end. Returns the root element's axial tangent
+    /// blocks of the `R_q` assembly (the stress row's, [`Ekf::measurement_rows`]).
+    fn directions(&mut self, model: &mut Model<T, S, N, D>) -> Result<TangentBlocks<T>, Error> {
         let s = *model.state();
         let g_eff = model.sys.effective_gravity(s.base_accel);
         let rec = self.rec;
@@ -927,13 +952,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // right-hand side is e_tip − R_q Ψ.
         let mut y: SVector<T, D>;
         let mut load_rhs = SVector::<T, D>::zeros();
+        let mut root = [[[T::zero(); 3]; 4]; 4];
         for (block, ch) in [
             (0usize, unit(T::one(), T::zero())),
             (M, unit(T::zero(), T::one())),
         ] {
-            model
-                .sys
-                .jacobian([&s.q, &s.v, &s.a], g_eff, &ch, s.contact, &mut self.scratch);
+            if let Some(t) =
+                model
+                    .sys
+                    .jacobian([&s.q, &s.v, &s.a], g_eff, &ch, s.contact, &mut self.scratch)
+            {
+                root = t;
+            }
             // The products on the band (the same sums as the dense product, in the same order,
             // without the terms outside the band, which are exact zeros).
             // R_q Ψ in the same pass as R_q Φ.
@@ -981,13 +1011,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         let b = self.residual + column(&self.dx, 2 * M) * self.rec.c_q;
         self.residual = b - self.basis.shapes * (self.basis.projection * b);
-        Ok(())
+        Ok(root)
     }
 
     /// The rows `H` of each sensor's reading over the filter's scaled coordinates at `n`
     /// (zero rows for absent sensors; the root-strain row, times the modulus and without its
-    /// bias, is the stress row).
-    fn measurement_rows(&self, model: &Model<T, S, N, D>) -> [SVector<T, X>; KINDS] {
+    /// bias, is the stress row), with the root element's axial tangent at the step's end as
+    /// [`Ekf::directions`] returns it.
+    fn measurement_rows(
+        &self,
+        model: &Model<T, S, N, D>,
+        root_tangent: &TangentBlocks<T>,
+    ) -> [SVector<T, X>; KINDS] {
         let rec = self.rec;
         let (ld, off) = (Self::LD, Self::OFF);
         let mut rows = [SVector::<T, X>::zeros(); KINDS];
@@ -1051,7 +1086,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         // Root strain (and stress): (g_q·δq' + g_v·δv' + g_a·δx) / E.
         let g_eff = model.sys.effective_gravity(s.base_accel);
-        let mut g = self.stress_gradients(model, &s.q, g_eff);
+        let mut g = self.stress_gradients_of(model, g_eff, root_tangent);
         for (gk, wk) in g.iter_mut().zip(self.recover.iter()) {
             *gk += *wk;
         }
