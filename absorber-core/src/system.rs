@@ -340,6 +340,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         contact: Contact,
         jac: &mut BandMatrix<T, D>,
     ) -> Option<TangentBlocks<T>> {
+        let root = self.beam_jacobian(qva[0], ch, jac);
+        self.add_tip_jacobian(qva, g_eff, ch, contact, jac);
+        root
+    }
+
+    /// The beam's part of [`System::jacobian`] (`jac` overwritten): with `c_q = 0` it does not
+    /// depend on the state (the estimator keeps its `∂r/∂v`).
+    pub(crate) fn beam_jacobian(
+        &self,
+        q: &SVector<T, D>,
+        ch: &Chain<T>,
+        jac: &mut BandMatrix<T, D>,
+    ) -> Option<TangentBlocks<T>> {
         jac.clear();
         let mut root = None;
         for k in 0..N {
@@ -348,14 +361,25 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 .sections()
                 .and_then(|s| s.get(k))
                 .map_or(&self.beam, |s| &s.beam);
-            let tangent = b.add_element_jacobian(k, qva[0], ch, jac);
+            let tangent = b.add_element_jacobian(k, q, ch, jac);
             if k == 0 {
                 root = tangent;
             }
         }
+        root
+    }
+
+    /// The tip rows' part of [`System::jacobian`], added into `jac` after the beam's.
+    pub(crate) fn add_tip_jacobian(
+        &self,
+        qva: [&SVector<T, D>; 3],
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+        jac: &mut BandMatrix<T, D>,
+    ) {
         let mut r = SVector::<T, D>::zeros();
         self.add_tip_rows(qva, g_eff, ch, contact, false, &mut r, jac);
-        root
     }
 
     /// Element `k`'s matrices and applied force (weight, point masses' weight, line load) of a
