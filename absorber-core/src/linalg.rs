@@ -140,7 +140,7 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
     /// columns advance together (`X` read by rows), one pass over the node envelope (the
     /// matrix's assembled structure: a Newton matrix along any chain).
     pub fn mul_mat<const K: usize>(&self, x: &SMatrix<T, D, K>, y: &mut SMatrix<T, D, K>) {
-        let mut z = [T::zero(); 0];
+        let mut z: [T; 0] = [];
         self.mul_rows::<K, false>(x, &[T::zero(); D], y, &mut z);
     }
 

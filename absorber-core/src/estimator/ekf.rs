@@ -552,7 +552,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         let (zero, one) = (T::zero(), T::one());
         let kl = |j: usize| -> T {
             match tangent.get(1).and_then(|r| r.get(j / 2)) {
-                Some([_, xy, yy]) => zero + one * if j % 2 == 0 { *xy } else { *yy },
+                Some([_, xy, yy]) => zero + one * if j.is_multiple_of(2) { *xy } else { *yy },
                 None => zero,
             }
         };
