@@ -471,6 +471,10 @@ mod tests {
     }
 }
 
+/// The 2×2 blocks of an element's axial tangent `K_l`: `(xx, xy, yy)` of block `(i, j)` for
+/// `j ≥ i` (the others by symmetry; those entries are zero).
+pub type TangentBlocks<T> = [[[T; 3]; 4]; 4];
+
 /// The axial force and tangent of one element at the 5 Gauss points, with the shape
 /// derivatives and weights converted to the scalar once (at construction, not per step).
 ///
@@ -537,7 +541,7 @@ impl<T: Real> AxialQuadrature<T> {
     /// points in one set of three accumulators (the same sums, in the same order, as one pass
     /// over the points adding into all thirty entries — which the M4 cannot keep in registers).
     #[inline]
-    fn force_and_blocks(&self, u: &ElementVector<T>) -> (ElementVector<T>, [[[T; 3]; 4]; 4]) {
+    fn force_and_blocks(&self, u: &ElementVector<T>) -> (ElementVector<T>, TangentBlocks<T>) {
         let mut f = ElementVector::zeros();
         let mut rr = [[T::zero(); 3]; 5];
         for ((sx, w), rr_p) in self.sx.iter().zip(self.weight.iter()).zip(rr.iter_mut()) {
@@ -621,6 +625,20 @@ impl<T: Real> AxialQuadrature<T> {
         scale: T,
         block: &mut [[T; 8]; 8],
     ) -> ElementVector<T> {
+        self.tangent_block_with(u, linear, scale, block).0
+    }
+
+    /// [`AxialQuadrature::tangent_block`], also returning `K_l`'s 2×2 blocks as computed
+    /// (`(xx, xy, yy)` of block `(i, j)` for `j ≥ i`): what another product of the same
+    /// tangent needs (the estimator's root-stress gradient), without a second quadrature.
+    #[inline(always)]
+    pub fn tangent_block_with(
+        &self,
+        u: &ElementVector<T>,
+        linear: &[[T; 4]; 4],
+        scale: T,
+        block: &mut [[T; 8]; 8],
+    ) -> (ElementVector<T>, TangentBlocks<T>) {
         let (f, blocks) = self.force_and_blocks(u);
         let zero = T::zero();
         // Block (i, j) with j < i is block (j, i) transposed; a 2×2 block is symmetric itself.
@@ -641,6 +659,6 @@ impl<T: Real> AxialQuadrature<T> {
                 }
             }
         }
-        f
+        (f, blocks)
     }
 }

@@ -13,7 +13,7 @@
 //! assembly works on those (half the products of the 8×8 forms) and writes straight into the
 //! system's residual and Newton matrix (no element matrix is built on the step path).
 
-use crate::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector};
+use crate::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector, TangentBlocks};
 use crate::linalg::BandMatrix;
 use crate::scalar::Real;
 use crate::tip::Chain;
@@ -203,6 +203,45 @@ impl<T: Real> Beam<T> {
         let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
         jac.add_block8(first, skip, &block);
         self.add_element_residual(k, &u, (&ue, &ae), &axial, applied, r);
+    }
+
+    /// Adds element `k`'s Newton matrix along `ch` into `jac`, the block of
+    /// [`Beam::element_residual_and_jacobian`] without the residual, and returns the blocks
+    /// of its axial tangent. Where `c_q = 0` (the estimator's `∂r/∂v`) the axial tangent is
+    /// left out (`None`): its terms there are `0 · K_l`, and the band holds the same numbers.
+    pub fn add_element_jacobian<const D: usize>(
+        &self,
+        k: usize,
+        q: &SVector<T, D>,
+        ch: &Chain<T>,
+        jac: &mut BandMatrix<T, D>,
+    ) -> Option<TangentBlocks<T>> {
+        let linear = self.linear_newton4(ch);
+        let mut block = [[T::zero(); 8]; 8];
+        let mut tangent = None;
+        if ch.c_q == T::zero() {
+            // `linear ⊗ I₂`: the entries `tangent_block` writes with a zero scale.
+            for (rows, lin) in block.chunks_exact_mut(2).zip(linear.iter()) {
+                if let [row_x, row_y] = rows {
+                    let pairs = row_x.chunks_exact_mut(2).zip(row_y.chunks_exact_mut(2));
+                    for ((px, py), l) in pairs.zip(lin.iter()) {
+                        if let ([x0, _], [_, y1]) = (px, py) {
+                            *x0 = *l;
+                            *y1 = *l;
+                        }
+                    }
+                }
+            }
+        } else {
+            let u = gather(q, k);
+            let (_, blocks) = self
+                .quadrature
+                .tangent_block_with(&u, &linear, ch.c_q, &mut block);
+            tangent = Some(blocks);
+        }
+        let (first, skip) = if k == 0 { (0, 4) } else { (4 * k - 4, 0) };
+        jac.add_block8(first, skip, &block);
+        tangent
     }
 
     /// Adds the beam's residual into `r` and its Newton matrix along the chain `ch` into `jac`:

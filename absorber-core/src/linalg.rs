@@ -137,8 +137,38 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
     }
 
     /// `Y = J X`: for every column the sums of [`BandMatrix::mul_vec`], in the same order; the
-    /// columns advance together (`X` read by rows), one pass over the band.
+    /// columns advance together (`X` read by rows), one pass over the node envelope (the
+    /// matrix's assembled structure: a Newton matrix along any chain).
     pub fn mul_mat<const K: usize>(&self, x: &SMatrix<T, D, K>, y: &mut SMatrix<T, D, K>) {
+        let mut z: [T; 0] = [];
+        self.mul_rows::<K, false>(x, &[T::zero(); D], y, &mut z);
+    }
+
+    /// [`BandMatrix::mul_mat`] and [`BandMatrix::mul_vec`] of one more vector, `z = J v`, in
+    /// the same pass (each with its own sums, in the same order).
+    pub fn mul_mat_vec<const K: usize>(
+        &self,
+        x: &SMatrix<T, D, K>,
+        v: &SVector<T, D>,
+        y: &mut SMatrix<T, D, K>,
+        z: &mut SVector<T, D>,
+    ) {
+        let mut vr = [T::zero(); D];
+        for (a, b) in vr.iter_mut().zip(v.iter()) {
+            *a = *b;
+        }
+        self.mul_rows::<K, true>(x, &vr, y, z.as_mut_slice());
+    }
+
+    /// The pass of [`BandMatrix::mul_mat_vec`]; with `V` false `v` is not read and `z` not
+    /// written.
+    fn mul_rows<const K: usize, const V: bool>(
+        &self,
+        x: &SMatrix<T, D, K>,
+        v: &[T; D],
+        y: &mut SMatrix<T, D, K>,
+        z: &mut [T],
+    ) {
         let mut xr = [[T::zero(); K]; D];
         for (c, col) in x.as_slice().chunks_exact(D).enumerate() {
             for (row, v) in xr.iter_mut().zip(col.iter()) {
@@ -148,20 +178,34 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
             }
         }
         for (i, row) in self.rows.iter().enumerate() {
-            let (lo, skip) = match i.checked_sub(BAND) {
-                Some(lo) => (lo, 0),
-                None => (0, BAND - i),
+            // Row i's node envelope (module doc): the columns of nodes i/4 − 1 … i/4 + 1, a
+            // fixed window per width (8 in the first node's rows, 12 inside, 9 in the last
+            // node's, 5 in the spin's). The band's other entries are exact zeros, whose terms
+            // change no sum.
+            let first = i / NODE * NODE;
+            let lo = first.saturating_sub(NODE);
+            let at = lo + BAND - i;
+            let (s, sv) = match (first + 2 * NODE).min(D) - lo {
+                12 => envelope_row::<T, D, K, 12, V>(row, &xr, v, at, lo),
+                9 => envelope_row::<T, D, K, 9, V>(row, &xr, v, at, lo),
+                8 => envelope_row::<T, D, K, 8, V>(row, &xr, v, at, lo),
+                5 => envelope_row::<T, D, K, 5, V>(row, &xr, v, at, lo),
+                _ => envelope_row_any::<T, D, K, V>(
+                    row,
+                    &xr,
+                    v,
+                    BAND.saturating_sub(i),
+                    i.saturating_sub(BAND),
+                ),
             };
-            let mut s = [T::zero(); K];
-            let (r, xw) = (row.get(skip..).unwrap_or(&[]), xr.get(lo..).unwrap_or(&[]));
-            for (a, xk) in r.iter().zip(xw.iter()) {
-                for (sc, v) in s.iter_mut().zip(xk.iter()) {
-                    *sc += *a * *v;
-                }
-            }
             for (c, sc) in s.iter().enumerate() {
                 if let Some(yi) = y.get_mut((i, c)) {
                     *yi = *sc;
+                }
+            }
+            if V {
+                if let Some(zi) = z.get_mut(i) {
+                    *zi = sv;
                 }
             }
         }
@@ -361,25 +405,58 @@ fn backward_dot<T: Real, const W: usize>(row: &[T; WIDTH], x: &[T], i: usize) ->
     }
 }
 
-/// `Σ_k a_k b_k` over the shorter of the two slices, summed in index order from zero (four
-/// terms per pass: the same sums as one at a time, fewer loop instructions).
-pub(crate) fn dot_in_order<T: Real>(a: &[T], b: &[T]) -> T {
-    let n = a.len().min(b.len());
-    let (a, b) = (a.get(..n).unwrap_or(&[]), b.get(..n).unwrap_or(&[]));
-    let (mut ca, mut cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let mut s = T::zero();
-    for (x, y) in (&mut ca).zip(&mut cb) {
-        if let ([x0, x1, x2, x3], [y0, y1, y2, y3]) = (x, y) {
-            s += *x0 * *y0;
-            s += *x1 * *y1;
-            s += *x2 * *y2;
-            s += *x3 * *y3;
+/// `Σ_k row[at + k] x[from + k]` for every column of `x` (given by rows) over a window of
+/// `W`, and with `V` the same sum for `v`, each in index order from zero (zero if the window
+/// does not fit).
+#[inline(always)]
+fn envelope_row<T: Real, const D: usize, const K: usize, const W: usize, const V: bool>(
+    row: &[T; WIDTH],
+    x: &[[T; K]; D],
+    v: &[T; D],
+    at: usize,
+    from: usize,
+) -> ([T; K], T) {
+    let mut s = [T::zero(); K];
+    let mut sv = T::zero();
+    let (Some(r), Some(xw), Some(vw)) = (
+        row.get(at..).and_then(|r| r.first_chunk::<W>()),
+        x.get(from..).and_then(|x| x.first_chunk::<W>()),
+        v.get(from..).and_then(|v| v.first_chunk::<W>()),
+    ) else {
+        return (s, sv);
+    };
+    for ((a, xk), vk) in r.iter().zip(xw.iter()).zip(vw.iter()) {
+        for (sc, y) in s.iter_mut().zip(xk.iter()) {
+            *sc += *a * *y;
+        }
+        if V {
+            sv += *a * *vk;
         }
     }
-    for (x, y) in ca.remainder().iter().zip(cb.remainder().iter()) {
-        s += *x * *y;
+    (s, sv)
+}
+
+/// [`envelope_row`] over the rest of the band row (a narrow matrix's rows).
+fn envelope_row_any<T: Real, const D: usize, const K: usize, const V: bool>(
+    row: &[T; WIDTH],
+    x: &[[T; K]; D],
+    v: &[T; D],
+    at: usize,
+    from: usize,
+) -> ([T; K], T) {
+    let mut s = [T::zero(); K];
+    let mut sv = T::zero();
+    let (r, xw) = (row.get(at..).unwrap_or(&[]), x.get(from..).unwrap_or(&[]));
+    let vw = v.get(from..).unwrap_or(&[]);
+    for ((a, xk), vk) in r.iter().zip(xw.iter()).zip(vw.iter()) {
+        for (sc, y) in s.iter_mut().zip(xk.iter()) {
+            *sc += *a * *y;
+        }
+        if V {
+            sv += *a * *vk;
+        }
     }
-    s
+    (s, sv)
 }
 
 /// `x[start .. start + W]` as a fixed window, if it lies inside `x`.
@@ -390,7 +467,7 @@ fn window<T, const W: usize>(x: &[T], start: usize) -> Option<&[T; W]> {
 
 /// `Σ a_k b_k` over fixed windows (unrolled), summed in index order.
 #[inline(always)]
-fn dot<T: Real, const W: usize>(a: &[T; W], b: &[T; W]) -> T {
+pub(crate) fn dot<T: Real, const W: usize>(a: &[T; W], b: &[T; W]) -> T {
     let mut s = T::zero();
     for (x, y) in a.iter().zip(b.iter()) {
         s += *x * *y;
@@ -558,15 +635,18 @@ mod tests {
     }
 
     /// The band's products equal nalgebra's dense product bit for bit (the same sums in the
-    /// same order; the terms outside the band are exact zeros), at the estimator's sizes (a
-    /// matrix narrower than the band's width, 13) and beyond it (21), in `f32`.
+    /// same order; the terms outside the node envelope, where an assembled Newton matrix is
+    /// zero, are exact zeros), at the estimator's sizes (a matrix narrower than the band's
+    /// width, 13) and beyond it (21), in `f32`; the fused product gives both bit for bit.
     #[test]
     fn band_products_equal_the_dense_product_bit_for_bit() {
         fn check<const D: usize>() {
             let mut band = BandMatrix::<f32, D>::zeros();
             for i in 0..D {
                 for j in 0..D {
-                    band.add(i, j, ((i * 5 + j * 11) as f32 * 0.61).sin() * 3.0);
+                    if in_envelope(i, j) {
+                        band.add(i, j, ((i * 5 + j * 11) as f32 * 0.61).sin() * 3.0);
+                    }
                 }
             }
             let a = band.to_dense();
@@ -581,6 +661,13 @@ mod tests {
             let mut w = SVector::<f32, D>::zeros();
             band.mul_vec(&v, &mut w);
             assert_eq!(w, a * v);
+            let v2 = SVector::<f32, D>::from_fn(|i, _| (i as f32 * 0.7).sin() * 1e-2);
+            let (mut y2, mut w2) = (SMatrix::<f32, D, 3>::zeros(), SVector::<f32, D>::zeros());
+            band.mul_mat_vec(&x, &v2, &mut y2, &mut w2);
+            assert_eq!(y2, y);
+            for (p, q) in w2.iter().zip((a * v2).iter()) {
+                assert_eq!(p.to_bits(), q.to_bits(), "{p} vs {q}");
+            }
         }
         check::<13>();
         check::<21>();

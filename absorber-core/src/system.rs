@@ -6,6 +6,7 @@
 //! the step path borrows it immutably next to the Newton workspace
 //! ([`crate::newton::Workspace`]) and the state.
 
+use crate::ancf::TangentBlocks;
 use crate::beam::Beam;
 use crate::dual::Plain;
 use crate::error::Error;
@@ -283,6 +284,23 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
             self.subtract_tip_force(r);
         }
+        self.add_tip_rows(qva, g_eff, ch, contact, plumb, r, jac)
+    }
+
+    /// The tip rows of [`System::residual_and_jacobian`]: their residual added into `r`, their
+    /// Newton matrix (dual numbers) into `jac`; returns the contact force (zero without a tip).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn add_tip_rows(
+        &self,
+        [q, v, a]: [&SVector<T, D>; 3],
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+        plumb: bool,
+        r: &mut SVector<T, D>,
+        jac: &mut BandMatrix<T, D>,
+    ) -> T {
         if !S::HAS_TIP {
             return T::zero();
         }
@@ -306,6 +324,62 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
         }
         force
+    }
+
+    /// The Newton matrix `c_m ∂r/∂a + c_v ∂r/∂v + c_q ∂r/∂q` into `jac` (overwritten), the
+    /// same numbers as [`System::residual_and_jacobian`] without the residual: the
+    /// estimator's `∂r/∂q` and `∂r/∂v` at a step's end. With `c_q = 0` the beam's axial
+    /// tangent is not evaluated ([`Beam::add_element_jacobian`]); otherwise the root
+    /// element's tangent blocks are returned (the root stress's gradient needs them).
+    #[inline(never)]
+    pub(crate) fn jacobian(
+        &self,
+        qva: [&SVector<T, D>; 3],
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+        jac: &mut BandMatrix<T, D>,
+    ) -> Option<TangentBlocks<T>> {
+        let root = self.beam_jacobian(qva[0], ch, jac);
+        self.add_tip_jacobian(qva, g_eff, ch, contact, jac);
+        root
+    }
+
+    /// The beam's part of [`System::jacobian`] (`jac` overwritten): with `c_q = 0` it does not
+    /// depend on the state (the estimator keeps its `∂r/∂v`).
+    pub(crate) fn beam_jacobian(
+        &self,
+        q: &SVector<T, D>,
+        ch: &Chain<T>,
+        jac: &mut BandMatrix<T, D>,
+    ) -> Option<TangentBlocks<T>> {
+        jac.clear();
+        let mut root = None;
+        for k in 0..N {
+            let b = self
+                .data
+                .sections()
+                .and_then(|s| s.get(k))
+                .map_or(&self.beam, |s| &s.beam);
+            let tangent = b.add_element_jacobian(k, q, ch, jac);
+            if k == 0 {
+                root = tangent;
+            }
+        }
+        root
+    }
+
+    /// The tip rows' part of [`System::jacobian`], added into `jac` after the beam's.
+    pub(crate) fn add_tip_jacobian(
+        &self,
+        qva: [&SVector<T, D>; 3],
+        g_eff: T,
+        ch: &Chain<T>,
+        contact: Contact,
+        jac: &mut BandMatrix<T, D>,
+    ) {
+        let mut r = SVector::<T, D>::zeros();
+        self.add_tip_rows(qva, g_eff, ch, contact, false, &mut r, jac);
     }
 
     /// Element `k`'s matrices and applied force (weight, point masses' weight, line load) of a

@@ -42,8 +42,9 @@
 use super::basis::ModalBasis;
 use super::health::{Health, HealthConfig, Verdict};
 use super::sensors::{ReadingUse, Readings, SensorKind, SensorSet, KINDS};
+use crate::ancf::TangentBlocks;
 use crate::error::Error;
-use crate::linalg::BandMatrix;
+use crate::linalg::{dot, BandMatrix};
 use crate::loads::{Loads, MAX_LOAD};
 use crate::model::{Contact, Model, StepReport};
 use crate::monitor::stress::{root_reaction_moment, static_root_moment, RootSection};
@@ -252,6 +253,10 @@ pub struct Ekf<T: Real, S: Scene, const N: usize, const D: usize, const M: usize
     w1: [[T; X]; X],
     w2: [[T; NOISE]; X],
     scratch: BandMatrix<T, D>,
+    /// The beam's part of `R_v` (`c K₄ ⊗ I₂` per element: constant), built once by
+    /// [`Ekf::finish`] (not in the filter's value expression: a second band there was built
+    /// on the boot stack); each sample adds the tip rows to a copy.
+    damping: Option<BandMatrix<T, D>>,
     _scene: core::marker::PhantomData<S>,
 }
 
@@ -300,9 +305,20 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         Ok(ekf)
     }
 
-    /// The recovery vectors and the static stress, from the built filter.
+    /// The recovery vectors, the static stress and `R_v`'s constant part, from the built
+    /// filter. Out of line (measured: 96 B less boot stack than inlined into the construction).
+    #[inline(never)]
     fn finish(&mut self, model: &Model<T, S, N, D>) {
         self.recover = self.recovery(model);
+        let velocity = Chain {
+            c_q: T::zero(),
+            c_v: T::one(),
+            c_m: T::zero(),
+        };
+        let damping = self.damping.insert(BandMatrix::zeros());
+        model
+            .sys
+            .beam_jacobian(model.equilibrium(), &velocity, damping);
         // The recovery's terms vanish at the equilibrium.
         self.static_stress = self
             .config
@@ -481,6 +497,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             w1: [[T::zero(); X]; X],
             w2: [[T::zero(); NOISE]; X],
             scratch: BandMatrix::zeros(),
+            damping: None,
             _scene: core::marker::PhantomData,
         }
     }
@@ -509,23 +526,46 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         q: &SVector<T, D>,
         g_eff: T,
     ) -> [SVector<T, D>; 3] {
-        const ROW: usize = 3;
         let (b, _) = model.sys.element_and_force(0, g_eff);
         let u = crate::beam::gather(q, 0);
         let mut block = [[T::zero(); 8]; 8];
         let zero4 = [[T::zero(); 4]; 4];
-        b.quadrature.tangent_block(&u, &zero4, T::one(), &mut block);
+        let (_, tangent) = b
+            .quadrature
+            .tangent_block_with(&u, &zero4, T::one(), &mut block);
+        self.stress_gradients_of(model, g_eff, &tangent)
+    }
+
+    /// [`Ekf::stress_gradients`] from element 0's axial tangent blocks at that configuration
+    /// (the `∂r/∂q` assembly's, [`crate::system::System::jacobian`]).
+    fn stress_gradients_of(
+        &self,
+        model: &Model<T, S, N, D>,
+        g_eff: T,
+        tangent: &TangentBlocks<T>,
+    ) -> [SVector<T, D>; 3] {
+        const ROW: usize = 3;
+        let (b, _) = model.sys.element_and_force(0, g_eff);
+        // Row 3 of K_l (the root node's vertical row), columns 4..8, as
+        // `AxialQuadrature::tangent_block` writes it with a zero linear part and unit scale:
+        // `0 + 1 · xy`, `0 + 1 · yy` of blocks (1, 2) and (1, 3).
+        let (zero, one) = (T::zero(), T::one());
+        let kl = |j: usize| -> T {
+            match tangent.get(1).and_then(|r| r.get(j / 2)) {
+                Some([_, xy, yy]) => zero + one * if j.is_multiple_of(2) { *xy } else { *yy },
+                None => zero,
+            }
+        };
         // σ = −M c/I with M = −R₃: dσ = (c/I) dR₃.
         let f = self.config.section.stress_of_moment(-T::one());
         let mut g = [SVector::<T, D>::zeros(); 3];
-        let row = block.get(ROW).copied().unwrap_or([T::zero(); 8]);
-        for (j, kl) in row.iter().enumerate().skip(4) {
+        for j in 4..8 {
             let (m, k) = (b.mass[(ROW, j)], b.stiffness[(ROW, j)]);
             let [gq, gv, ga] = &mut g;
             if let (Some(gq), Some(gv), Some(ga)) =
                 (gq.get_mut(j - 4), gv.get_mut(j - 4), ga.get_mut(j - 4))
             {
-                *gq = f * (k + *kl);
+                *gq = f * (k + kl(j));
                 *gv = f * k * b.damping;
                 *ga = f * m;
             }
@@ -668,7 +708,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         report: StepReport<T>,
     ) -> Result<Estimate<T>, Error> {
         let (ld, off) = (Self::LD, Self::OFF);
-        self.directions(model)?;
+        let root_tangent = self.directions(model)?;
         let contact = model.state().contact;
         // The ball's relative angle is in the filter's subspace only while it rolls off the
         // stops (held on a stop it is fixed; flying, it is the flight state's).
@@ -686,7 +726,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         };
         let near_event = matches!(S::BALL, BallKind::Free)
             && (!ball_free || since_event < self.config.event_window);
-        let rows = self.measurement_rows(model);
+        let rows = self.measurement_rows(model, &root_tangent);
         // The measurement updates, on copies of the factors (committed at the end).
         let (mut u, mut d) = (self.ud_u, self.ud_d);
         let mut delta = SVector::<T, X>::zeros();
@@ -890,12 +930,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     /// The directions of the filter's subspace through the last step: `δx` for each modal
     /// position and velocity error of the predictor and for the load, from the Newton matrix
     /// (factored again at the step's end if the step ended with other factors: an event) and
-    /// `R_q`, `R_v` assembled at the step's end.
-    fn directions(&mut self, model: &mut Model<T, S, N, D>) -> Result<(), Error> {
+    /// `R_q`, `R_v` assembled at the step's end. Returns the root element's axial tangent
+    /// blocks of the `R_q` assembly (the stress row's, [`Ekf::measurement_rows`]).
+    fn directions(&mut self, model: &mut Model<T, S, N, D>) -> Result<TangentBlocks<T>, Error> {
         let s = *model.state();
         let g_eff = model.sys.effective_gravity(s.base_accel);
         let rec = self.rec;
-        let mut r = SVector::<T, D>::zeros();
         if !model.work.has_factors(rec.c_q, s.contact) {
             // An event step ended with another matrix (a sub-step's, or another contact's):
             // factor the step's own at its end.
@@ -913,6 +953,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                 contact: s.contact,
                 plumb: false,
             };
+            let mut r = SVector::<T, D>::zeros();
             model
                 .sys
                 .refresh_at(&p, [&s.q, &s.v, &s.a], &mut model.work, &mut r)?;
@@ -927,30 +968,48 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         // right-hand side is e_tip − R_q Ψ.
         let mut y: SVector<T, D>;
         let mut load_rhs = SVector::<T, D>::zeros();
+        let mut root = [[[T::zero(); 3]; 4]; 4];
         for (block, ch) in [
             (0usize, unit(T::one(), T::zero())),
             (M, unit(T::zero(), T::one())),
         ] {
-            model.sys.residual_and_jacobian(
-                [&s.q, &s.v, &s.a],
-                g_eff,
-                &ch,
-                s.contact,
-                false,
-                &mut r,
-                &mut self.scratch,
-            );
+            let qva = [&s.q, &s.v, &s.a];
+            if block == 0 {
+                if let Some(t) = model
+                    .sys
+                    .jacobian(qva, g_eff, &ch, s.contact, &mut self.scratch)
+                {
+                    root = t;
+                }
+            } else if let Some(damping) = &self.damping {
+                // R_v: the beam's constant part, then the tip rows at the step's end.
+                self.scratch = *damping;
+                model
+                    .sys
+                    .add_tip_jacobian(qva, g_eff, &ch, s.contact, &mut self.scratch);
+            } else {
+                model
+                    .sys
+                    .jacobian(qva, g_eff, &ch, s.contact, &mut self.scratch);
+            }
             // The products on the band (the same sums as the dense product, in the same order,
             // without the terms outside the band, which are exact zeros).
+            // R_q Ψ in the same pass as R_q Φ.
             let mut rphi = SMatrix::<T, D, M>::zeros();
-            self.scratch.mul_mat(&self.consistent, &mut rphi);
+            if block == 0 {
+                self.scratch.mul_mat_vec(
+                    &self.consistent,
+                    &self.residual,
+                    &mut rphi,
+                    &mut load_rhs,
+                );
+            } else {
+                self.scratch.mul_mat(&self.consistent, &mut rphi);
+            }
             for i in 0..M {
                 y = -column(&rphi, i);
                 model.work.solve(&mut y)?;
                 set_column(&mut self.dx, block + i, &y);
-            }
-            if block == 0 {
-                self.scratch.mul_vec(&self.residual, &mut load_rhs);
             }
         }
         // The load: R_P = −e_tip, so J δx = e_tip − R_q Ψ.
@@ -980,13 +1039,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         let b = self.residual + column(&self.dx, 2 * M) * self.rec.c_q;
         self.residual = b - self.basis.shapes * (self.basis.projection * b);
-        Ok(())
+        Ok(root)
     }
 
     /// The rows `H` of each sensor's reading over the filter's scaled coordinates at `n`
     /// (zero rows for absent sensors; the root-strain row, times the modulus and without its
-    /// bias, is the stress row).
-    fn measurement_rows(&self, model: &Model<T, S, N, D>) -> [SVector<T, X>; KINDS] {
+    /// bias, is the stress row), with the root element's axial tangent at the step's end as
+    /// [`Ekf::directions`] returns it.
+    fn measurement_rows(
+        &self,
+        model: &Model<T, S, N, D>,
+        root_tangent: &TangentBlocks<T>,
+    ) -> [SVector<T, X>; KINDS] {
         let rec = self.rec;
         let (ld, off) = (Self::LD, Self::OFF);
         let mut rows = [SVector::<T, X>::zeros(); KINDS];
@@ -1050,7 +1114,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         // Root strain (and stress): (g_q·δq' + g_v·δv' + g_a·δx) / E.
         let g_eff = model.sys.effective_gravity(s.base_accel);
-        let mut g = self.stress_gradients(model, &s.q, g_eff);
+        let mut g = self.stress_gradients_of(model, g_eff, root_tangent);
         for (gk, wk) in g.iter_mut().zip(self.recover.iter()) {
             *gk += *wk;
         }
@@ -1202,12 +1266,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         for k in 0..KINDS {
             f[(off + k, off + k)] = T::one();
         }
-        for i in 0..X {
-            for j in 0..X {
-                f[(i, j)] *= self.scale[j] / self.scale[i];
+        // Only F's nonzero entries (a zero stays zero; its sign is never read: F's entries
+        // enter below only as nonzero factors).
+        for (j, col) in f.as_mut_slice().chunks_exact_mut(X).enumerate() {
+            let sj = self.scale[j];
+            for (x, si) in col.iter_mut().zip(self.scale.iter()) {
+                if *x != T::zero() {
+                    *x *= sj / *si;
+                }
             }
         }
-        // Noise columns (scaled) and their variances: the first `n` columns of `w2`.
+        // Noise columns (scaled) and their variances: the first `n` columns of `w2`, the others
+        // zero (Thornton's windows read them).
+        self.w2 = [[T::zero(); NOISE]; X];
         let mut q = [T::zero(); NOISE];
         let mut n = 0;
         let mut push = |col: SVector<T, X>, var: T, w2: &mut [[T; NOISE]; X]| {
@@ -1251,17 +1322,25 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         }
         if matches!(S::BALL, BallKind::Free) {
             if let Some((a, u)) = self.ball_direction(model) {
-                let (aq, av) = (embed::<T, M, X>(&a, 0), embed::<T, M, X>(&a, M));
                 let (uq, uv) = (embed::<T, M, X>(&u, 0), embed::<T, M, X>(&u, M));
-                // Rank-one maps I − c u aᵀ, applied to F (scaled: ũ = T⁻¹u, ã = T a).
-                let mut map = |u: &SVector<T, X>, a: &SVector<T, X>, c: T| {
-                    let ut = u.component_div(&self.scale);
-                    let at = a.component_mul(&self.scale);
-                    let atf = f.transpose() * at;
-                    // f −= (ũ (Fᵀã)ᵀ) c, entry by entry (no temporary matrices).
-                    for (col, bj) in f.as_mut_slice().chunks_exact_mut(X).zip(atf.iter()) {
-                        for (x, ui) in col.iter_mut().zip(ut.iter()) {
-                            *x -= *ui * *bj * c;
+                // Rank-one maps I − c u aᵀ on the block of rows `at..at + M` (the positions' or
+                // the velocities'), applied to F (scaled: ũ = T⁻¹u, ã = T a): `u` and `a` are
+                // zero elsewhere, so only that block's entries of `Fᵀã` have nonzero terms
+                // (summed in row order, as the full product sums them) and only its rows move.
+                let scale = &self.scale;
+                let mut map = |at: usize, c: T| {
+                    let s = scale.as_slice().get(at..at + M).unwrap_or(&[]);
+                    for col in f.as_mut_slice().chunks_exact_mut(X) {
+                        let Some(col) = col.get_mut(at..at + M) else {
+                            continue;
+                        };
+                        // (Fᵀã)_j over the block, then f −= ũ (Fᵀã)_j c.
+                        let mut bj = T::zero();
+                        for ((x, ak), sk) in col.iter().zip(a.iter()).zip(s.iter()) {
+                            bj += *ak * *sk * *x;
+                        }
+                        for ((x, uk), sk) in col.iter_mut().zip(u.iter()).zip(s.iter()) {
+                            *x -= *uk / *sk * bj * c;
                         }
                     }
                 };
@@ -1269,19 +1348,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
                     // The relative rate's error reverses like the rate: v ← v − (1 + e) u (a·v),
                     // and the rebound speed's uncertainty is added.
                     let e = model.params().ball.restitution;
-                    map(&uv, &av, T::one() + e);
+                    map(M, T::one() + e);
                     let sd = self.config.impact_sd * imp.relative_speed.abs();
                     push(uv.component_div(&self.scale), sd * sd, &mut self.w2);
                 }
                 if !ball_free {
                     // Held or flying: the relative angle is the model's; its error leaves the
                     // subspace.
-                    map(&uq, &aq, T::one());
-                    map(&uv, &av, T::one());
+                    map(0, T::one());
+                    map(M, T::one());
                 } else if ball_event && report.impact.is_none() {
                     // Landed or released: the relative angle and rate restart with their prior.
-                    map(&uq, &aq, T::one());
-                    map(&uv, &av, T::one());
+                    map(0, T::one());
+                    map(M, T::one());
                     let [sa, sr] = self.config.ball_restart_sd;
                     push(uq.component_div(&self.scale), sa * sa, &mut self.w2);
                     push(uv.component_div(&self.scale), sr * sr, &mut self.w2);
@@ -1289,18 +1368,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             }
         }
         // W₁ = F U by rows, only its columns of positive weight (the others add nothing to
-        // U D Uᵀ); U is unit upper triangular, so column k of F U takes F's columns 0..=k.
-        // U's rows restricted to those columns, then each row of F U as the sum of the rows of
-        // U that F's nonzero entries of that row pick, in order (F is sparse: 2M + 1 entries
-        // in a modal row, at most three in the load's and one in a bias's).
+        // U D Uᵀ): U's rows restricted to those columns, then each row of F U as the sum of
+        // the rows of U that F's nonzero entries of that row pick, in order (F is sparse: 2M + 1
+        // entries in a modal row, at most three in the load's and one in a bias's), over whole
+        // rows (U is unit upper triangular: a row's entries left of its diagonal, and the
+        // columns beyond the kept ones, are exact zeros and change no sum).
         let mut d1 = [T::zero(); X];
         let mut ur = [[T::zero(); X]; X];
-        // Row k of U is zero left of its diagonal: in the kept columns, before `first[k]`.
-        let mut first = [0usize; X];
         let mut n1 = 0;
         let columns = self.ud_u.as_slice().chunks_exact(X);
-        for ((uk, dk), fk) in columns.zip(self.ud_d.iter()).zip(first.iter_mut()) {
-            *fk = n1;
+        for (uk, dk) in columns.zip(self.ud_d.iter()) {
             if !is_positive(*dk) {
                 continue;
             }
@@ -1313,18 +1390,31 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             }
             n1 += 1;
         }
-        let ft = f.transpose();
-        self.w1 = [[T::zero(); X]; X];
-        for (row, fi) in self.w1.iter_mut().zip(ft.as_slice().chunks_exact(X)) {
-            let row = row.get_mut(..n1).unwrap_or(&mut []);
-            for ((fik, uk), fk) in fi.iter().zip(ur.iter()).zip(first.iter()) {
+        // F's nonzero entries of row i lie in columns `lo..=hi`: the modal rows' in the modal
+        // columns and the load's, the load's block's in that block, a bias's on the diagonal
+        // (the entries outside are never written, and the ball's maps move only modal rows,
+        // by multiples of modal rows). F is read in place, column-major.
+        let fs = f.as_slice();
+        for (i, row) in self.w1.iter_mut().enumerate() {
+            let (lo, hi) = if i < ld {
+                (0, ld)
+            } else if i < off {
+                (ld, off - 1)
+            } else {
+                (i, i)
+            };
+            let mut acc = [T::zero(); X];
+            for k in lo..=hi {
+                let (Some(fik), Some(uk)) = (fs.get(k * X + i), ur.get(k)) else {
+                    continue;
+                };
                 if *fik != T::zero() {
-                    let (Some(x), Some(y)) = (row.get_mut(*fk..), uk.get(*fk..)) else {
-                        continue;
-                    };
-                    axpy(x, *fik, y);
+                    for (x, y) in acc.iter_mut().zip(uk.iter()) {
+                        *x += *fik * *y;
+                    }
                 }
             }
+            *row = acc;
         }
         thornton(
             &mut self.w1,
@@ -1486,7 +1576,15 @@ fn bierman_f<T: Real, const X: usize>(
 /// Thornton's modified weighted Gram–Schmidt time update: `U D Uᵀ = W₁ D₁ W₁ᵀ + W₂ Q W₂ᵀ`
 /// (rows of `W = [W₁ W₂]` orthogonalized from the last up, in the weights `diag(D₁, Q)`).
 /// `W₁`, `W₂` are given by rows, of which the first `n1` and `n2` columns count (columns of
-/// zero weight add nothing and are left out); they are overwritten.
+/// zero weight add nothing and are left out); they are overwritten. The columns beyond `n1`
+/// and `n2` must be zero.
+///
+/// Each step's sums and updates run over fixed windows of the rows ([`thornton_step`]): the
+/// window of `W₁` covers the pivot row's nonzero entries (from its first nonzero, the load's
+/// and the biases' rows of F U start at the load's column, and the rows below only remove
+/// such rows, to `n1`), that of `W₂` its first `n2` columns. The entries the window adds
+/// beyond those are exact zeros of the pivot row, so every sum takes the same nonzero terms in
+/// the same order as over the used entries alone, with fewer loop instructions.
 #[allow(clippy::too_many_arguments)]
 fn thornton<T: Real, const X: usize, const Q: usize>(
     w1: &mut [[T; X]; X],
@@ -1499,55 +1597,99 @@ fn thornton<T: Real, const X: usize, const Q: usize>(
     d: &mut SVector<T, X>,
 ) {
     u.as_mut_slice().fill(T::zero());
-    // The weighted row of each step below (its used entries written before they are read).
-    let mut v1 = [T::zero(); X];
-    let mut v2 = [T::zero(); Q];
     for j in (0..X).rev() {
-        let (up1, rest1) = w1.split_at_mut(j);
-        let (up2, rest2) = w2.split_at_mut(j);
-        let (Some(wj1), Some(wj2)) = (rest1.first(), rest2.first()) else {
+        let Some(wj1) = w1.get(j) else {
             continue;
         };
-        let (wj1, wj2) = (wj1.get(..n1).unwrap_or(wj1), wj2.get(..n2).unwrap_or(wj2));
-        // Its leading zeros (the load's and the biases' rows of F U start at the load's
-        // column, and the rows below only remove such rows) are left out of every sum.
+        let wj1 = wj1.get(..n1).unwrap_or(wj1);
         let s1 = wj1
             .iter()
             .position(|x| *x != T::zero())
             .unwrap_or(wj1.len());
-        let wj1 = wj1.get(s1..).unwrap_or(&[]);
-        // The weighted row `w_jk weight_k`: D_j = Σ_k w_jk² weight_k, and its products with
-        // the rows above, divided by D_j, give U's column j.
-        for ((v, w), a) in v1.iter_mut().zip(wj1.iter()).zip(d1.iter().skip(s1)) {
-            *v = *w * *a;
-        }
-        for ((v, w), a) in v2.iter_mut().zip(wj2.iter()).zip(q.iter()) {
-            *v = *w * *a;
-        }
-        let (v1, v2) = (
-            v1.get(..wj1.len()).unwrap_or(&v1),
-            v2.get(..n2).unwrap_or(&v2),
-        );
-        let dj = dot(wj1, v1) + dot(wj2, v2);
-        if let Some(x) = u.get_mut((j, j)) {
-            *x = T::one();
-        }
+        let len = wj1.len() - s1;
+        // The narrowest window that holds the used entries (`len` from `s1`).
+        let narrow = len <= 4 && X >= 4;
+        let wide2 = n2 > 4 || Q < 4;
+        let dj = match (narrow, wide2) {
+            (true, false) => thornton_step::<T, X, Q, 4, 4>(w1, d1, s1, w2, q, j, u),
+            (true, true) => thornton_step::<T, X, Q, 4, Q>(w1, d1, s1, w2, q, j, u),
+            (false, false) => thornton_step::<T, X, Q, X, 4>(w1, d1, s1, w2, q, j, u),
+            (false, true) => thornton_step::<T, X, Q, X, Q>(w1, d1, s1, w2, q, j, u),
+        };
         if let Some(x) = d.get_mut(j) {
             *x = if is_positive(dj) { dj } else { T::zero() };
         }
-        if !is_positive(dj) {
+    }
+}
+
+/// Step `j` of [`thornton`] over a window of `A` columns of `W₁` (from `s1`, moved left to fit
+/// in the row; the entries left of `s1` are the pivot row's leading zeros) and the first `B`
+/// of `W₂`: `D_j = Σ_k w_jk² weight_k`, then for every row above `U_ij = (w_i · v_j) / D_j`
+/// and `w_i −= U_ij w_j` (`v_j` the weighted pivot row). Returns `D_j`; nothing changes but
+/// `U_jj = 1` if it is not positive.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn thornton_step<T: Real, const X: usize, const Q: usize, const A: usize, const B: usize>(
+    w1: &mut [[T; X]; X],
+    d1: &[T; X],
+    s1: usize,
+    w2: &mut [[T; Q]; X],
+    q: &[T; Q],
+    j: usize,
+    u: &mut SMatrix<T, X, X>,
+) -> T {
+    let a = s1.min(X.saturating_sub(A));
+    let (up1, rest1) = w1.split_at_mut(j);
+    let (up2, rest2) = w2.split_at_mut(j);
+    let (Some(wj1), Some(wj2), Some(d1)) = (
+        rest1
+            .first()
+            .and_then(|r| r.get(a..))
+            .and_then(|r| r.first_chunk::<A>()),
+        rest2.first().and_then(|r| r.first_chunk::<B>()),
+        d1.get(a..).and_then(|r| r.first_chunk::<A>()),
+    ) else {
+        return T::zero();
+    };
+    let Some(q) = q.first_chunk::<B>() else {
+        return T::zero();
+    };
+    // The weighted row `w_jk weight_k`.
+    let mut v1 = [T::zero(); A];
+    for ((v, w), x) in v1.iter_mut().zip(wj1.iter()).zip(d1.iter()) {
+        *v = *w * *x;
+    }
+    let mut v2 = [T::zero(); B];
+    for ((v, w), x) in v2.iter_mut().zip(wj2.iter()).zip(q.iter()) {
+        *v = *w * *x;
+    }
+    let dj = dot(wj1, &v1) + dot(wj2, &v2);
+    if let Some(x) = u.get_mut((j, j)) {
+        *x = T::one();
+    }
+    if !is_positive(dj) {
+        return dj;
+    }
+    for (i, (wi1, wi2)) in up1.iter_mut().zip(up2.iter_mut()).enumerate() {
+        let (Some(x1), Some(x2)) = (
+            wi1.get_mut(a..).and_then(|r| r.first_chunk_mut::<A>()),
+            wi2.first_chunk_mut::<B>(),
+        ) else {
             continue;
+        };
+        let uij = (dot(x1, &v1) + dot(x2, &v2)) / dj;
+        if let Some(x) = u.get_mut((i, j)) {
+            *x = uij;
         }
-        for (i, (wi1, wi2)) in up1.iter_mut().zip(up2.iter_mut()).enumerate() {
-            let wi1 = wi1.get_mut(s1..).unwrap_or(&mut []);
-            let uij = (dot(wi1, v1) + dot(wi2, v2)) / dj;
-            if let Some(x) = u.get_mut((i, j)) {
-                *x = uij;
-            }
-            axpy(wi1, -uij, wj1);
-            axpy(wi2, -uij, wj2);
+        let c = -uij;
+        for (x, y) in x1.iter_mut().zip(wj1.iter()) {
+            *x += c * *y;
+        }
+        for (x, y) in x2.iter_mut().zip(wj2.iter()) {
+            *x += c * *y;
         }
     }
+    dj
 }
 
 /// Column `j` of `m`, owned, read through its storage (a column view's arithmetic reaches a
@@ -1575,30 +1717,6 @@ fn set_column<T: Real, const R: usize, const C: usize>(
         for (x, y) in c.iter_mut().zip(v.iter()) {
             *x = *y;
         }
-    }
-}
-
-/// `Σ_k a_k b_k` over the shorter of the two slices, in order.
-fn dot<T: Real>(a: &[T], b: &[T]) -> T {
-    crate::linalg::dot_in_order(a, b)
-}
-
-/// `a_k += c b_k` over the shorter of the two slices (four per pass, as [`dot`]).
-fn axpy<T: Real>(a: &mut [T], c: T, b: &[T]) {
-    let n = a.len().min(b.len());
-    let (a, b) = (a.get_mut(..n).unwrap_or(&mut []), b.get(..n).unwrap_or(&[]));
-    let mut ca = a.chunks_exact_mut(4);
-    let mut cb = b.chunks_exact(4);
-    for (x, y) in (&mut ca).zip(&mut cb) {
-        if let ([x0, x1, x2, x3], [y0, y1, y2, y3]) = (x, y) {
-            *x0 += c * *y0;
-            *x1 += c * *y1;
-            *x2 += c * *y2;
-            *x3 += c * *y3;
-        }
-    }
-    for (x, y) in ca.into_remainder().iter_mut().zip(cb.remainder().iter()) {
-        *x += c * *y;
     }
 }
 
