@@ -46,7 +46,7 @@ fn quick_stability_matrix() {
 #[test]
 fn full_and_core_momenta_agree() {
     use absorber_core::{FreeBallModel, Model, Params};
-    use host_sim::full::{FullSolver, SceneKind};
+    use absorber_full::{FullSolver, SceneKind};
     use host_sim::stability::FullProbe;
     let p = Params::<f64>::default();
     let mut core: FreeBallModel<f64, 3, 13> = Model::at_rest(p, 0.0).unwrap();
@@ -94,7 +94,7 @@ fn full_and_core_momenta_agree() {
                 .max((y_of(&full) - y0 - 0.5 * h * (p0 + full.vertical_momentum())).abs() / h);
         }
         worst = worst.max((core.vertical_momentum() - full.vertical_momentum()).abs());
-        use host_sim::sim::Simulator;
+        use absorber_full::sim::Simulator;
         vdiff = vdiff.max((core.tip_velocity() - full.solver.observe().tip_velocity).abs());
         vmax = vmax.max(core.tip_velocity().abs());
         largest = largest.max(core.vertical_momentum().abs());

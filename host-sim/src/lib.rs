@@ -1,4 +1,4 @@
-//! Host tools for the absorber: full solver, scenes, sweeps, plots, reports.
+//! Host tools for the absorber: scenes, sweeps, plots, reports.
 //!
 //! Layout (dependencies point down only):
 //! - [`cli`] (options) → [`commands`] (what each command does);
@@ -6,12 +6,11 @@
 //!   [`fatigue`], [`ensemble`],
 //!   [`sweep`], [`tune`], [`calibrate`], [`identify`];
 //! - running a scene: [`scene`], [`excitation`], [`run`] (streamed), [`figures`], [`plot`];
-//! - the solvers behind [`sim::Simulator`]: [`core_sim`] (the embedded core; N is picked at
-//!   compile time by the one macro [`with_elements!`]) and [`full`] (the full solver);
+//! - the solvers behind [`absorber_full::sim::Simulator`]: [`core_sim`] (the embedded core; N is
+//!   picked at compile time by the one macro [`with_elements!`]) and [`absorber_full`] (the full
+//!   solver, its own crate);
 //! - [`output`]: the one writer of every file (atomic, manifest, lock).
 pub use absorber_core;
-pub mod full;
-pub mod sim;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
 pub mod accuracy;
 pub mod calibrate;

@@ -3,8 +3,8 @@
 //! non-zero, never a backtrace. (Complements `tests/cli.rs`.)
 
 use absorber_core::{Error, Params};
+use absorber_full::{FullSolver, SceneKind};
 use host_sim::excitation::Excitation;
-use host_sim::full::{FullSolver, SceneKind};
 use host_sim::scene::Scene;
 use std::path::PathBuf;
 use std::process::Command;

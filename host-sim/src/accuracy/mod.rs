@@ -17,9 +17,9 @@ pub mod cap;
 pub mod report;
 pub mod sim;
 
-use crate::full::{FullSolver, SceneKind};
 use crate::scene::Precision;
 use absorber_core::{NewtonKind, Params};
+use absorber_full::{FullSolver, SceneKind};
 use anyhow::{anyhow, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -416,7 +416,7 @@ pub trait Probe {
     fn static_tip(&self) -> f64;
 }
 
-impl<S: crate::sim::Simulator + ?Sized> Probe for S {
+impl<S: absorber_full::sim::Simulator + ?Sized> Probe for S {
     fn advance(&mut self, a: f64) -> Result<(u32, Option<f64>), String> {
         let r = self.step(a).map_err(|e| format!("{e:?}"))?;
         Ok((r.iterations, r.impact.map(|i| i.time)))
@@ -509,7 +509,7 @@ pub fn simulate<P: Probe + ?Sized>(
 }
 
 /// Builds the embedded core for `cfg` and `scene`, at rest with the scene's input at t = 0.
-pub fn embedded(cfg: &Config, scene: &TestScene) -> Result<Box<dyn crate::sim::Simulator>> {
+pub fn embedded(cfg: &Config, scene: &TestScene) -> Result<Box<dyn absorber_full::sim::Simulator>> {
     build_embedded(
         scene.body,
         cfg.elements,

@@ -546,7 +546,7 @@ impl Ctx {
         writeln!(m, "## 1. The reference and its convergence\n")?;
         writeln!(
             m,
-            "Reference: `host_sim::full::FullSolver`, **N = {}**, **h = {} ms**, `f64`, full Newton \
+            "Reference: `absorber_full::FullSolver`, **N = {}**, **h = {} ms**, `f64`, full Newton \
              to **1e-10**, damping-matched integrator (γ = {:.3}, β = {:.4}, C = {:.2e} s · K_t). \
              Full-solver cost at this size: {:.1} s of host time per simulated second.\n",
             self.rcfg.elements,

@@ -5,8 +5,8 @@
 use super::Body;
 use crate::core_sim::{build_from, Start};
 use crate::scene::{Kind, Precision};
-use crate::sim::Simulator;
 use absorber_core::{Error, Params};
+use absorber_full::sim::Simulator;
 
 /// The embedded core for `body` with `n` elements in `f32` or `f64`, at rest with input `a0`.
 pub fn build_embedded(

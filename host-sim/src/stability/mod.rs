@@ -21,13 +21,13 @@
 //! [`matrix`] is the list of cases, [`run_case`] runs one, [`drift`] compares the `f32` and the
 //! `f64` core over a long run, [`report`] writes the Markdown page.
 
-use crate::full::{FullSolver, SceneKind};
-use crate::sim::Simulator;
 use crate::wind::{LoadComponent, LoadModel};
 use absorber_core::{
     Arm, ArmParams, BeamOnly, Error, FreeBall, ImpactModel, Loads, LockedBall, Model, NewtonKind,
     Params, Real, Scene, StepReport,
 };
+use absorber_full::sim::Simulator;
+use absorber_full::{FullSolver, SceneKind};
 use std::fmt::Write as _;
 use std::time::Instant;
 
