@@ -2,9 +2,8 @@
 //!
 //! Layout (dependencies point down only):
 //! - [`cli`] (options) → [`commands`] (what each command does);
-//! - the studies: [`stability`], [`accuracy`], [`validation`], [`chaos`] (they write docs/),
-//!   [`fatigue`], [`ensemble`],
-//!   [`sweep`], [`tune`], [`calibrate`], [`identify`];
+//! - the studies: [`fatigue`], [`ensemble`], [`sweep`], [`tune`], [`calibrate`], [`identify`]
+//!   (the studies that write docs/ are the developer tool `absorber-studies`);
 //! - running a scene: [`scene`], [`excitation`], [`run`] (streamed), [`figures`], [`plot`];
 //! - the solvers behind [`absorber_full::sim::Simulator`]: [`core_sim`] (the embedded core; N is
 //!   picked at compile time by the one macro [`with_elements!`]) and [`absorber_full`] (the full
@@ -12,9 +11,7 @@
 //! - [`output`]: the one writer of every file (atomic, manifest, lock).
 pub use absorber_core;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
-pub mod accuracy;
 pub mod calibrate;
-pub mod chaos;
 pub mod cli;
 pub mod commands;
 pub mod core_sim;
@@ -34,8 +31,6 @@ pub mod output;
 pub mod plot;
 pub mod run;
 pub mod scene;
-pub mod stability;
 pub mod sweep;
 pub mod tune;
-pub mod validation;
 pub mod wind;
