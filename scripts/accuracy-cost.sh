@@ -7,7 +7,7 @@
 #
 # Writes docs/accuracy-cost.json: { "<label>": { "args": …, "steps": …, "failed": …,
 # "instructions_per_step": <mean>, "worst": <max>, "state_hash": … }, … } for the
-# configurations `host-sim accuracy --firmware-configs` lists; `host-sim accuracy` reads it for
+# configurations `absorber-studies accuracy --firmware-configs` lists; `absorber-studies accuracy` reads it for
 # its cost column (instructions per simulated second = instructions per step / h).
 #
 # Usage: scripts/accuracy-cost.sh   (needs what .ci/embedded.sh installs; ~1 min per 10 configs)
@@ -25,7 +25,7 @@ done
 
 export CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="--remap-path-prefix=${CARGO_HOME:-$HOME/.cargo}=/cargo --remap-path-prefix=$root=/absorber"
 cargo build -q --release -p absorber-firmware --bin fw-cost
-cargo build -q --release -p host-sim
+cargo build -q --release -p absorber-studies
 cargo build -q -p absorber-firmware --target "$target" --profile fw --config firmware/fw-profile.toml --bin fw-cost
 gcc -O2 -Wall -Wextra -shared -fPIC -fvisibility=hidden -o "$work/step-counter.so" scripts/qemu-step-counter.c
 
@@ -40,7 +40,7 @@ for site in $(awk -v e="${entry#0x}" '$2 == "bl" && $3 == e {sub(":", "", $1); p
 done
 [ -n "$rets" ] || { echo "accuracy-cost: no call of cost_step"; exit 1; }
 
-"$tdir/release/host-sim" accuracy --firmware-configs >"$work/configs.tsv"
+"$tdir/release/absorber-studies" accuracy --firmware-configs >"$work/configs.tsv"
 : >"$work/results.tsv"
 while IFS=$'\t' read -r label args; do
     [ -n "$label" ] || continue

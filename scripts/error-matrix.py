@@ -19,8 +19,10 @@ With `--python PY` (an interpreter that imports the `absorber` package, e.g. the
 scripts/python-test.sh), the Python bindings get the same kind of cases: an `AbsorberError`
 (or `TypeError`) naming the key and value is clear; a crash of the interpreter is an abort.
 
-Usage: scripts/error-matrix.py [--bin target/release/host-sim] [--python PY] [--jobs 2]
-       [--only WORD] [--verbose]. Prints one line per case that is not clear or ok and the
+Usage: scripts/error-matrix.py [--bin target/release/host-sim]
+       [--studies-bin target/release/absorber-studies] [--python PY] [--jobs 2]
+       [--only WORD] [--verbose]. The studies' cases (`stability`, `accuracy`, `validation`,
+       `chaos`) run the developer tool `absorber-studies`. Prints one line per case that is not clear or ok and the
 counts; exits 1 when any case is wrong, abort or lost, or more than `--max-unclear` (default 0)
 are unclear. Takes well under a minute on two cores (most cases are refused before any work).
 """
@@ -614,6 +616,7 @@ def main():
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     target = os.environ.get("CARGO_TARGET_DIR", os.path.join(repo, "target"))
     ap.add_argument("--bin", default=os.path.join(target, "release", "host-sim"))
+    ap.add_argument("--studies-bin", default=os.path.join(target, "release", "absorber-studies"))
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--only", default=None, help="cases whose name contains this")
     ap.add_argument("--max-unclear", type=int, default=0)
@@ -621,12 +624,19 @@ def main():
     ap.add_argument("--verbose", action="store_true", help="print every case")
     a = ap.parse_args()
     binary = os.path.abspath(a.bin)
+    studies = os.path.abspath(a.studies_bin)
     root = tempfile.mkdtemp(prefix="error-matrix-")
     todo = cases() + (python_cases() if a.python else [])
     todo = [c for c in todo if a.only is None or a.only in c.name]
 
     def run(c):
-        return run_case(c, a.python if c.args[0] == "PY" else binary, root, repo)
+        if c.args[0] == "PY":
+            tool = a.python
+        elif c.args[0] in ("stability", "accuracy", "validation", "chaos"):
+            tool = studies
+        else:
+            tool = binary
+        return run_case(c, tool, root, repo)
     counts = {}
     try:
         with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:

@@ -5,7 +5,8 @@
 #
 # Usage: scripts/regen-docs.sh [STAGE...]     (default: every stage; `--list` lists them)
 #
-# Stages and their wall time on 2 cores (release build of host-sim assumed warm):
+# Stages and their wall time on 2 cores (release builds of host-sim and absorber-studies assumed
+# warm; the studies that write docs/ are the developer tool absorber-studies):
 #   gain         firmware/src/estimator_gain.rs (the mast arm's calibrated N = 3 model and gain)   5 s
 #   stability    docs/stability.md                                                              10 s
 #   validation   docs/validation.md, docs/img/validation-*.png                                  30 s
@@ -34,8 +35,9 @@ for s in "${stages[@]}"; do
   [[ " ${ALL[*]} " == *" $s "* ]] || { echo "unknown stage '$s' (stages: ${ALL[*]})" >&2; exit 2; }
 done
 mkdir -p "$OUT"
-cargo build --release -q -p host-sim
+cargo build --release -q -p host-sim -p absorber-studies
 bin=target/release/host-sim
+studies=target/release/absorber-studies
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -44,11 +46,11 @@ for s in "${stages[@]}"; do
   echo "== $s"
   case $s in
     gain) "$bin" estimate --scene scenes/mast-arm.toml --emit-firmware firmware/src/estimator_gain.rs ;;
-    stability) "$bin" stability ;;
-    validation) "$bin" validation ;;
+    stability) "$studies" stability ;;
+    validation) "$studies" validation ;;
     embedded) scripts/embedded-report.sh ;;
     cost) scripts/accuracy-cost.sh ;;
-    accuracy) "$bin" accuracy ;;
+    accuracy) "$studies" accuracy ;;
     monitoring)
       "$bin" estimate --table docs/monitoring.md
       "$bin" estimate --scene scenes/mast-arm.toml --out "$tmp/estimate"
@@ -60,7 +62,7 @@ for s in "${stages[@]}"; do
       for f in fatigue.png fatigue.csv; do cp "$tmp/fatigue/$f" "docs/img/${f/fatigue/fatigue_damage_rate}"; done
       cp "$tmp/fatigue/fatigue_calibrated.png" "$tmp/fatigue/fatigue_calibrated.csv" docs/img/
       ;;
-    chaos) "$bin" chaos ;; # its defaults are the document's grid, which its header repeats
+    chaos) "$studies" chaos ;; # its defaults are the document's grid, which its header repeats
     fmu) scripts/fmu-test.sh | tee "$OUT/fmu.txt" ;;
     fleet)
       if ! python3 -c "import absorber, dask.distributed" 2>/dev/null; then

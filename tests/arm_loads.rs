@@ -3,7 +3,7 @@
 
 use absorber::core_model::loads::{ArmParams, Loads, PointMass, MAX_POINT_MASSES};
 use absorber::core_model::{Arm, BeamOnly, Loaded, Model, Params};
-use absorber::host_sim::full::{FullSolver, SceneKind};
+use absorber_full::{FullSolver, SceneKind};
 
 fn weightless() -> Params<f64> {
     Params {

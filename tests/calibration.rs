@@ -4,11 +4,11 @@
 //! uncalibrated model bit for bit as before.
 
 use absorber_core::{Calibration, FreeBallModel, LockedBall, LockedBallModel, Model, Params};
+use absorber_full::sim::Simulator;
+use absorber_full::{FullSolver, SceneKind};
 use host_sim::calibrate::{fit, reference};
-use host_sim::full::{FullSolver, SceneKind};
 use host_sim::identify::{identify, Record, RecordKind};
 use host_sim::scene::{Kind, Scene};
-use host_sim::sim::Simulator;
 
 fn locked_scene() -> Scene {
     let mut s = Scene::paper();

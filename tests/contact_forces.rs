@@ -4,7 +4,7 @@
 //! Lagrange multipliers (an independent route: `FullSolver::contact_forces_from_multipliers`).
 
 use absorber_core::{Contact, FreeBallModel, Params};
-use host_sim::full::{FullSolver, SceneKind};
+use absorber_full::{FullSolver, SceneKind};
 
 fn weight(p: &Params<f64>) -> f64 {
     p.ball.mass * p.gravity

@@ -1,10 +1,10 @@
-//! Ball flight in the full solver (`host_sim::full`, the law of
+//! Ball flight in the full solver (`absorber_full`, the law of
 //! `absorber_core::flight`) over long runs of the paper scene. The closed-form and
-//! conservation tests are the unit tests of `host-sim/src/full/flight.rs`; the agreement with
+//! conservation tests are the unit tests of `absorber-full/src/flight.rs`; the agreement with
 //! the core is in `full_vs_core.rs`.
 
 use absorber_core::Params;
-use host_sim::full::{FullSolver, SceneKind};
+use absorber_full::{FullSolver, SceneKind};
 
 /// Table 1 at 4.10 Hz (N = 3 and 8) and 4.13 Hz (N = 3), 60 s, flight on: every step
 /// converges, and every state is consistent — in flight the ball is inside the housing

@@ -1,5 +1,5 @@
 //! The full solver (maximal coordinates, constraints, augmented system, coordinate
-//! partitioning: `host_sim::full`) against the embedded core (minimal coordinates:
+//! partitioning: `absorber_full`) against the embedded core (minimal coordinates:
 //! `absorber_core::Model`).
 //!
 //! Both integrate the same independent coordinates (free beam coordinates and, for a free
@@ -14,8 +14,8 @@
 //! below are stated as fractions of `tol·L` and the measured values are printed.
 
 use absorber_core::{FreeBallModel, LockedBall, Model, Params};
-use host_sim::full::{FullSolver, SceneKind};
-use host_sim::sim::Simulator;
+use absorber_full::sim::Simulator;
+use absorber_full::{FullSolver, SceneKind};
 use std::time::Instant;
 
 const AMP: f64 = 0.5e-3;

@@ -9,16 +9,16 @@
 //! scheme with ρ∞ = 0.8 damps those modes by 0.8 per step and the first mode by 3e-7 of
 //! critical (docs/model.md), so the physical damping alone sets the resonance.
 //!
-//! Reference: the full solver (`host_sim::full`, f64) with the same physics — same element
+//! Reference: the full solver (`absorber_full`, f64) with the same physics — same element
 //! count, the same structural damping, generalized-α ρ∞ = 0.8 — at a six times finer step
 //! (0.5 ms). Budget: 10 % of the peak tip response, for every model; the printed
 //! measurements show how much of it is used (the discretization in time, and f32 rounding).
 
 use absorber_core::scalar::{lit, to_f64};
 use absorber_core::{Damping, LockedBall, Model, Params};
+use absorber_full::sim::Simulator;
+use absorber_full::{FullSolver, SceneKind};
 use host_sim::core_sim::params_f32;
-use host_sim::full::{FullSolver, SceneKind};
-use host_sim::sim::Simulator;
 
 const H: f64 = 0.003;
 const H_REF: f64 = 0.0005;

@@ -80,7 +80,7 @@ fn frequencies_and_sag(
     full: bool,
 ) -> Result<(Vec<f64>, f64)> {
     if full {
-        use crate::full::{FullSolver, SceneKind};
+        use absorber_full::{FullSolver, SceneKind};
         let k = match kind {
             Kind::Beam => SceneKind::BeamOnly,
             Kind::Tip => SceneKind::TipMass,

@@ -19,7 +19,7 @@ use std::path::PathBuf;
 ///
 /// Exit codes: 0 success; 1 error (bad input, failed run, unwritable output; one line on
 /// stderr naming the field or file); 2 command-line usage error; 3 completed, outputs written,
-/// but some points of `sweep`/`fatigue`/`validation` failed (marked FAILED in table, CSV and
+/// but some points of `sweep`/`fatigue` failed (marked FAILED in table, CSV and
 /// plot); 101 internal error (a bug).
 #[derive(Parser, Debug)]
 #[command(name = "host-sim", version, about, long_about)]
@@ -83,9 +83,6 @@ pub enum Command {
     /// Track radius R that puts the ball at half the beam's first frequency (coupled
     /// linearized model), by bisection.
     Tune(TuneArgs),
-    /// Numerical stability matrix (stiff and extreme cases, bad input, f32/f64 drift);
-    /// writes docs/stability.md.
-    Stability(crate::stability::StabilityArgs),
     /// Fatigue damage rate at the clamp vs frequency, free vs locked ball (root stress,
     /// rainflow, AASHTO S–N, Miner): CSV, PNG and `fatigue.manifest.json`; failed points are
     /// marked as in `sweep` (exit code 3). Every column is over the steady window (t ≥
@@ -94,13 +91,6 @@ pub enum Command {
     /// per hour of it. The start-up from rest is left out because it is not service loading:
     /// a life is the steady hourly rate extrapolated, and the ring-up would bias it.
     Fatigue(FatigueArgs),
-    /// Writes docs/chaos.md: the free ball's statistics (amplitude, tip RMS, impact rate,
-    /// flight share, separation rate) over steps, meshes and solvers, each an ensemble with its
-    /// spread, and whether the embedded model's converge to the reference.
-    Chaos(crate::chaos::ChaosArgs),
-    /// Writes docs/accuracy.md: error of embedded configurations (elements, step, precision,
-    /// Newton budget) against a converged full-solver reference, and their run time.
-    Accuracy(crate::accuracy::AccuracyArgs),
     /// Fits the calibration of an N-element model (factors on E·I and E·a, lumped mass
     /// fraction) to the converged full solver (f₁, f₂ with the ball locked, the free-ball beam
     /// mode, the static sag) or to a measured pole (`--target-f1`/`--target-zeta`,
@@ -110,9 +100,6 @@ pub enum Command {
     /// or ambient response) in a CSV; prints it and writes it as TOML for `calibrate
     /// --from-identified`.
     Identify(IdentifyArgs),
-    /// Writes docs/validation.md: every quantitative claim of the paper beside this model's
-    /// numbers (3 elements and a converged mesh), with verdicts, reasons and figures.
-    Validation(ValidationArgs),
     /// The monitor's estimators against the full solver (16 elements, f64): on a real arm
     /// under the scene's `[[loads]]`, or (`--lab`) on the paper's arm with its free ball under
     /// a wind-like tip force; read by the scene's `[[sensors]]`; the extended Kalman filter
@@ -174,20 +161,6 @@ pub struct EstimateArgs {
     /// `--lab`: the tip force's frequency [Hz] (default: the scene's excitation frequency).
     #[arg(long, allow_negative_numbers = true)]
     pub frequency: Option<f64>,
-}
-
-/// `validation` options.
-#[derive(Args, Debug, Clone)]
-pub struct ValidationArgs {
-    /// Output document.
-    #[arg(long, default_value = "docs/validation.md")]
-    pub out: std::path::PathBuf,
-    /// Directory of its figures (the document links them as `img/...`).
-    #[arg(long, default_value = "docs/img")]
-    pub img: std::path::PathBuf,
-    /// Elements of the converged mesh.
-    #[arg(long, default_value_t = 16)]
-    pub converged: usize,
 }
 
 /// Scene selection and the overrides of the model alone (`static`, `modes`, `tune`: no
@@ -618,22 +591,72 @@ pub fn main(cli: Cli) -> Result<()> {
     crate::commands::dispatch(cli)
 }
 
+/// A command-line tool of this workspace as a process (`host-sim`, and the studies' developer
+/// tool): parses the arguments of `C` (negative numbers as values), runs `run` and turns its
+/// outcome into the exit code its help documents: 0 success; 1 error (one line on stderr);
+/// 2 usage error; 3 completed with failed points ([`PointsFailed`](crate::output::PointsFailed));
+/// 101 a panic (a bug, reported on one line).
+pub fn process<C: Parser>(run: impl FnOnce(C) -> Result<()>) -> std::process::ExitCode {
+    use std::process::ExitCode;
+    // A file-size limit (`ulimit -f`) kills a process with SIGXFSZ by default, with no word;
+    // ignored, the write fails with EFBIG and the output layer names the file and keeps the
+    // previous result, as for a full disk.
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to SIG_IGN at startup, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
+    // Safety net: a panic would be a bug; report it on one line, without a backtrace.
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown".into());
+        let at = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        eprintln!("error: internal error (panic{at}): {msg}");
+    }));
+    let cli = match C::try_parse_from(with_negative_numbers(std::env::args_os())) {
+        Ok(cli) => cli,
+        Err(e) => return usage_error::<C>(e),
+    };
+    // The process ends after a panic: nothing observes state it may have left half-updated.
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli))) {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) => {
+            eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
+            if e.downcast_ref::<crate::output::PointsFailed>().is_some() {
+                ExitCode::from(crate::output::EXIT_POINTS_FAILED)
+            } else {
+                ExitCode::FAILURE
+            }
+        }
+        Err(_) => ExitCode::from(101),
+    }
+}
+
 /// Reports a command line clap refused and returns its exit code (2; 0 for `--help` and
 /// `--version`). An unknown command is named with the commands there are.
-pub fn usage_error(e: clap::Error) -> std::process::ExitCode {
+pub fn usage_error<C: clap::CommandFactory>(e: clap::Error) -> std::process::ExitCode {
     use clap::error::{ContextKind, ContextValue, ErrorKind};
     if e.kind() == ErrorKind::InvalidSubcommand {
         let given = match e.get(ContextKind::InvalidSubcommand) {
             Some(ContextValue::String(s)) => s.clone(),
             _ => String::new(),
         };
-        let commands: Vec<String> = <Cli as clap::CommandFactory>::command()
+        let command = C::command();
+        let commands: Vec<String> = command
             .get_subcommands()
             .map(|c| c.get_name().to_string())
             .collect();
         eprintln!(
-            "error: unknown command `{given}` (allowed: {}; `host-sim --help` says what each does)",
-            commands.join(", ")
+            "error: unknown command `{given}` (allowed: {}; `{} --help` says what each does)",
+            commands.join(", "),
+            command.get_name()
         );
         return std::process::ExitCode::from(2);
     }

@@ -3,12 +3,12 @@
 //! every supported combination).
 
 use crate::scene::{Kind, Precision};
-use crate::sim::{Observation, Simulator};
 use absorber_core::{
     BallParams, BeamOnly, BeamParams, Calibration, Damping, Energies, Error, FreeBall,
     FreeBallNoStops, Integrator, LockedBall, Model, Params, Real, Scene, StepReport, TipMass,
     TipParams,
 };
+use absorber_full::sim::{Observation, Simulator};
 
 /// A core model of any scene, size and scalar.
 pub struct CoreSim<T: Real, S: Scene, const N: usize, const D: usize> {

@@ -1,21 +1,17 @@
-//! Host tools for the absorber: full solver, scenes, sweeps, plots, reports.
+//! Host tools for the absorber: scenes, sweeps, plots, reports.
 //!
 //! Layout (dependencies point down only):
 //! - [`cli`] (options) → [`commands`] (what each command does);
-//! - the studies: [`stability`], [`accuracy`], [`validation`], [`chaos`] (they write docs/),
-//!   [`fatigue`], [`ensemble`],
-//!   [`sweep`], [`tune`], [`calibrate`], [`identify`];
+//! - the studies: [`fatigue`], [`ensemble`], [`sweep`], [`tune`], [`calibrate`], [`identify`]
+//!   (the studies that write docs/ are the developer tool `absorber-studies`);
 //! - running a scene: [`scene`], [`excitation`], [`run`] (streamed), [`figures`], [`plot`];
-//! - the solvers behind [`sim::Simulator`]: [`core_sim`] (the embedded core; N is picked at
-//!   compile time by the one macro [`with_elements!`]) and [`full`] (the full solver);
+//! - the solvers behind [`absorber_full::sim::Simulator`]: [`core_sim`] (the embedded core; N is
+//!   picked at compile time by the one macro [`with_elements!`]) and [`absorber_full`] (the full
+//!   solver, its own crate);
 //! - [`output`]: the one writer of every file (atomic, manifest, lock).
 pub use absorber_core;
-pub mod full;
-pub mod sim;
 // Command-line tool: scenes, excitation, the core behind `Simulator`, runs, sweeps, plots.
-pub mod accuracy;
 pub mod calibrate;
-pub mod chaos;
 pub mod cli;
 pub mod commands;
 pub mod core_sim;
@@ -35,8 +31,6 @@ pub mod output;
 pub mod plot;
 pub mod run;
 pub mod scene;
-pub mod stability;
 pub mod sweep;
 pub mod tune;
-pub mod validation;
 pub mod wind;

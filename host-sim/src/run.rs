@@ -3,7 +3,7 @@
 
 use crate::excitation::{self, Excitation};
 use crate::scene::{Scene, Solver};
-use crate::sim::Simulator;
+use absorber_full::sim::Simulator;
 use anyhow::{anyhow, bail, Result};
 
 /// Builds the scene's solver at rest in the static equilibrium with input `base_accel0` at t = 0.
@@ -32,8 +32,8 @@ fn build_at_rest(scene: &Scene, base_accel0: f64) -> Result<Box<dyn Simulator>> 
                 .map_err(|e| start_error(e, scene))
         }
         Solver::Full => {
-            use crate::full::{FullSolver, SceneKind};
             use crate::scene::{Kind, Precision};
+            use absorber_full::{FullSolver, SceneKind};
             if f.precision != Precision::F64 {
                 bail!("the full solver is f64 only (use --precision f64 or --solver core)");
             }

@@ -92,7 +92,7 @@ pub enum Solver {
     /// The embedded reduced model (`absorber-core`).
     #[default]
     Core,
-    /// The full multibody solver (`host_sim::full`).
+    /// The full multibody solver (`absorber_full`).
     Full,
 }
 

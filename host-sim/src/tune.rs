@@ -140,9 +140,9 @@ pub fn arm_track_radius(scene: &Scene, ratio: f64) -> Result<ArmTuning> {
         .ok_or_else(|| anyhow!("the scene has no `[arm]`"))?;
     let p = scene.params()?;
     let a = arm.params()?;
-    let full = crate::full::FullSolver::arm_at_rest(
+    let full = absorber_full::FullSolver::arm_at_rest(
         p,
-        crate::full::SceneKind::BeamOnly,
+        absorber_full::SceneKind::BeamOnly,
         ARM_ELEMENTS,
         &a,
         0.0,

@@ -5,8 +5,8 @@
 //! only if the core's `energies()` sums the arm's sections and heads.
 
 use absorber_core::{Arm, BeamOnly, Loads, Model};
-use host_sim::full::{FullSolver, SceneKind};
-use host_sim::sim::Simulator;
+use absorber_full::sim::Simulator;
+use absorber_full::{FullSolver, SceneKind};
 
 fn mast_arm() -> (absorber_core::Params<f64>, absorber_core::ArmParams<f64>) {
     let scene = host_sim::scene::Scene::from_toml(include_str!("../../scenes/mast-arm.toml"))

@@ -339,21 +339,6 @@ fn a_poorly_resolved_frequency_is_warned_about() {
 }
 
 #[test]
-fn stability_only_does_not_overwrite_the_document() {
-    let doc = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/stability.md");
-    let before = std::fs::read(doc).unwrap();
-    for extra in [&[][..], &["--out", doc][..]] {
-        let mut a = vec!["stability", "--only", "extreme", "--quick"];
-        a.extend_from_slice(extra);
-        let o = run(&a);
-        assert_eq!(o.status.code(), Some(1), "{a:?}");
-        let e = String::from_utf8_lossy(&o.stderr);
-        assert!(e.contains("--only") && e.contains("--out"), "{e}");
-    }
-    assert_eq!(std::fs::read(doc).unwrap(), before);
-}
-
-#[test]
 fn failed_points_have_no_numbers() {
     use host_sim::sweep::SweepPoint;
     let ok = SweepPoint {

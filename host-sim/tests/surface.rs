@@ -100,19 +100,6 @@ fn errors_name_the_key_users_write() {
         &run(&["static", "--scene", scene.to_str().unwrap()]),
         &["`integrator.max_iterations`", "too few"],
     );
-    let out = tmp("validation");
-    refused(
-        &run(&[
-            "validation",
-            "--converged",
-            "0",
-            "--out",
-            out.join("v.md").to_str().unwrap(),
-            "--img",
-            out.to_str().unwrap(),
-        ]),
-        &["`--converged`", "0", "4 ..= 256"],
-    );
 }
 
 /// Before: `sweep --jobs 1000000` started a thread per job (with a 64 MiB stack each): nothing

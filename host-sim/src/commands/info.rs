@@ -13,12 +13,12 @@ use crate::tune::ARM_ELEMENTS;
 /// The structure `static` and `modes` describe: the scene's solver at rest, or for a scene with
 /// an `[arm]` the arm itself (full solver, [`ARM_ELEMENTS`] elements, f64), with its
 /// (solver, elements) as printed.
-fn structure(s: &Scene) -> Result<(Box<dyn crate::sim::Simulator>, usize)> {
+fn structure(s: &Scene) -> Result<(Box<dyn absorber_full::sim::Simulator>, usize)> {
     let Some(arm) = &s.file.arm else {
         return Ok((crate::run::build_simulator(s, 0.0)?, s.file.elements));
     };
-    use crate::full::{FullSolver, SceneKind};
     use crate::scene::Kind;
+    use absorber_full::{FullSolver, SceneKind};
     let kind = match s.file.kind {
         Kind::Beam => SceneKind::BeamOnly,
         Kind::Tip => SceneKind::TipMass,

@@ -1,9 +1,7 @@
 //! What each command does. The options are in [`crate::cli`]; the computations in the library
-//! modules (`run`, `sweep`, `fatigue`, `tune`, and the studies `stability`, `accuracy`,
-//! `validation`); every file goes through [`crate::output`].
+//! modules (`run`, `sweep`, `fatigue`, `tune`); every file goes through [`crate::output`].
 
 mod calibrate;
-mod docs;
 mod estimate;
 mod fatigue;
 pub mod fmu;
@@ -34,13 +32,9 @@ pub fn dispatch(cli: Cli) -> Result<()> {
         Command::Run(a) => run::run(&a),
         Command::Sweep(a) => sweep::sweep_cmd(&a),
         Command::Tune(a) => info::tune_cmd(&a),
-        Command::Stability(a) => docs::stability(&a),
         Command::Fatigue(a) => fatigue::run(&a),
-        Command::Accuracy(a) => docs::accuracy(&a),
-        Command::Chaos(a) => crate::chaos::run(&a),
         Command::Calibrate(a) => calibrate::calibrate(&a),
         Command::Identify(a) => calibrate::identify(&a),
-        Command::Validation(a) => docs::validation(&a),
         Command::Estimate(a) => estimate::run(&a),
         Command::Fmu(a) => fmu::run(&a),
     }

@@ -227,9 +227,9 @@ fn truth(
     let h = params.integrator.step;
     let mut pt = params;
     pt.integrator.tolerance = TRUTH_TOLERANCE;
-    let mut s = crate::full::FullSolver::arm_at_rest(
+    let mut s = absorber_full::FullSolver::arm_at_rest(
         pt,
-        crate::full::SceneKind::BeamOnly,
+        absorber_full::SceneKind::BeamOnly,
         TRUTH_ELEMENTS,
         &a.arm,
         0.0,
@@ -246,7 +246,7 @@ fn truth(
         0,
         TRUTH_ELEMENTS,
     );
-    let stress_of = |st: &crate::full::FullState, line0: f64| {
+    let stress_of = |st: &absorber_full::FullState, line0: f64| {
         let applied =
             sec0.weight(params.gravity + st.base_accel) + sec0.beam.element.line_load_force(line0);
         clamp_stress(&sec0.beam, applied, &section, st)
@@ -546,9 +546,9 @@ mod tests {
         let a = ArmScene::of(&scene("mast-arm.toml")).expect("arm");
         let mut pt = a.params;
         pt.integrator.tolerance = TRUTH_TOLERANCE;
-        let f = crate::full::FullSolver::arm_at_rest(
+        let f = absorber_full::FullSolver::arm_at_rest(
             pt,
-            crate::full::SceneKind::BeamOnly,
+            absorber_full::SceneKind::BeamOnly,
             TRUTH_ELEMENTS,
             &a.arm,
             0.0,

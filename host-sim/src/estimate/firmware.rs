@@ -40,9 +40,9 @@ pub fn constants(scene: &Scene) -> Result<String> {
     let f_truth = {
         let mut pt = params;
         pt.integrator.tolerance = TRUTH_TOLERANCE;
-        let f = crate::full::FullSolver::arm_at_rest(
+        let f = absorber_full::FullSolver::arm_at_rest(
             pt,
-            crate::full::SceneKind::BeamOnly,
+            absorber_full::SceneKind::BeamOnly,
             TRUTH_ELEMENTS,
             &arm,
             0.0,

@@ -21,13 +21,13 @@ use super::{
     TRUTH_ELEMENTS, TRUTH_TOLERANCE,
 };
 pub use crate::ensemble::Spread;
-use crate::full::{FullSolver, SceneKind};
 use crate::scene::{Scene, SensorSpec};
-use crate::sim::Simulator;
 use absorber_core::estimator::SensorKind;
 use absorber_core::monitor::fatigue::DetailCategory;
 use absorber_core::monitor::stress::RootSection;
 use absorber_core::{FreeBall, Loaded, LockedBall, Model, Params};
+use absorber_full::sim::Simulator;
+use absorber_full::{FullSolver, SceneKind};
 use anyhow::{bail, Result};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -148,7 +148,7 @@ fn truth(
     let beam = absorber_core::beam::Beam::new(element, p.damping.stiffness_proportional);
     let zero_line = vec![0.0; TRUTH_ELEMENTS];
     let tip = 4 * TRUTH_ELEMENTS + 1;
-    let stress_of = |st: &crate::full::FullState| {
+    let stress_of = |st: &absorber_full::FullState| {
         clamp_stress(
             &beam,
             beam.element.gravity_force(p.gravity + st.base_accel),

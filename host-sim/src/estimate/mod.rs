@@ -299,7 +299,7 @@ pub(crate) fn clamp_stress(
     b: &absorber_core::beam::Beam<f64>,
     applied: absorber_core::ancf::ElementVector<f64>,
     section: &RootSection<f64>,
-    st: &crate::full::FullState,
+    st: &absorber_full::FullState,
 ) -> f64 {
     use absorber_core::ancf::ElementVector;
     let u = ElementVector::<f64>::from_fn(|i, _| st.q[i]);

@@ -45,7 +45,7 @@
 mod impulse;
 
 use super::{FullSolver, FullState};
-use crate::full::kin::{RB1, RB2};
+use crate::kin::{RB1, RB2};
 use absorber_core::flight::{hermite_root, separation_fraction};
 use absorber_core::{Contact, Error, Landing, Side, StepReport};
 

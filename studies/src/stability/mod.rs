@@ -1,4 +1,4 @@
-//! Numerical stability on stiff and extreme cases (`host-sim stability`, `docs/stability.md`).
+//! Numerical stability on stiff and extreme cases (`absorber-studies stability`, `docs/stability.md`).
 //!
 //! Every case runs one solver (the embedded core in `f32` or `f64`, or the full solver) from
 //! its static equilibrium under a base acceleration sequence and checks, after every step:
@@ -21,13 +21,13 @@
 //! [`matrix`] is the list of cases, [`run_case`] runs one, [`drift`] compares the `f32` and the
 //! `f64` core over a long run, [`report`] writes the Markdown page.
 
-use crate::full::{FullSolver, SceneKind};
-use crate::sim::Simulator;
-use crate::wind::{LoadComponent, LoadModel};
 use absorber_core::{
     Arm, ArmParams, BeamOnly, Error, FreeBall, ImpactModel, Loads, LockedBall, Model, NewtonKind,
     Params, Real, Scene, StepReport,
 };
+use absorber_full::sim::Simulator;
+use absorber_full::{FullSolver, SceneKind};
+use host_sim::wind::{LoadComponent, LoadModel};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -638,7 +638,7 @@ fn boxed<T: Real + 'static, S: Scene + 'static, const N: usize, const D: usize>(
 
 macro_rules! by_elements {
     ($t:ty, $s:ty, $x:tt, $n:expr, $p:expr, $a:expr) => {
-        $crate::with_elements!(
+        host_sim::with_elements!(
             $n,
             [1, 2, 3, 16, 64],
             $x,
@@ -652,7 +652,7 @@ macro_rules! by_elements {
 }
 
 fn locked<T: Real + 'static>(n: usize, p: Params<T>, a0: T) -> Result<Box<dyn Probe>, Error> {
-    crate::with_elements!(
+    host_sim::with_elements!(
         n,
         [3],
         0,
@@ -677,13 +677,14 @@ fn arm_core<T: Real + 'static>(
             reason: "arm stability cases: 3",
         });
     }
-    let m = Model::<T, Arm<BeamOnly>, 3, 12>::arm_at_rest(p, &crate::core_sim::cast_arm(arm), a0)?;
+    let m =
+        Model::<T, Arm<BeamOnly>, 3, 12>::arm_at_rest(p, &host_sim::core_sim::cast_arm(arm), a0)?;
     Ok(Box::new(CoreProbe(m)))
 }
 
 /// The case's parameters in `f32`, with its Newton variant and budget rule.
 fn f32_params(case: &Case) -> Params<f32> {
-    let p = crate::core_sim::params_f32(&case.params);
+    let p = host_sim::core_sim::params_f32(&case.params);
     Params {
         integrator: absorber_core::Integrator {
             newton: case.params.integrator.newton,
@@ -968,7 +969,7 @@ fn harmonic(amplitude: f64, frequency: f64) -> Input {
 pub enum Length {
     /// Short runs for `cargo test` (seconds in total).
     Quick,
-    /// The documented matrix (`host-sim stability`).
+    /// The documented matrix (`absorber-studies stability`).
     Full,
 }
 
@@ -1448,7 +1449,7 @@ pub fn matrix(length: Length) -> Vec<Case> {
 /// structural engineer checks it for. Both solvers' energy balances are checked with the work
 /// of the loads, each through its own [`Balance`] (see the page's introduction).
 fn arm_cases(quick: bool) -> Vec<Case> {
-    let scene = crate::scene::Scene::from_toml(include_str!("../../../scenes/mast-arm.toml"));
+    let scene = host_sim::scene::Scene::from_toml(include_str!("../../../scenes/mast-arm.toml"));
     let setup = scene.and_then(|sc| {
         let f = &sc.file;
         let arm_file = f
@@ -1456,7 +1457,7 @@ fn arm_cases(quick: bool) -> Vec<Case> {
             .as_ref()
             .ok_or_else(|| anyhow::anyhow!("no `[arm]`"))?;
         let params = sc.params()?;
-        let taper = crate::scene::taper_of(arm_file, params.beam.length);
+        let taper = host_sim::scene::taper_of(arm_file, params.beam.length);
         Ok((
             params,
             arm_file.params()?,
@@ -1602,7 +1603,7 @@ pub fn drift(frequency: f64, duration: f64, window: f64) -> Result<Vec<DriftWind
     let a0 = input.at(0, h);
     let mut m64: FreeBallModel<f64, 3, 13> = Model::at_rest(p, a0)?;
     let mut m32: FreeBallModel<f32, 3, 13> =
-        Model::at_rest(crate::core_sim::params_f32(&p), a0 as f32)?;
+        Model::at_rest(host_sim::core_sim::params_f32(&p), a0 as f32)?;
     let (s64, s32) = (
         m64.static_tip_deflection(),
         f64::from(m32.static_tip_deflection()),
@@ -1739,7 +1740,7 @@ pub fn drift_table(windows: &[DriftWindow]) -> String {
     s
 }
 
-/// `host-sim stability`: runs the matrix and the drift study, writes `docs/stability.md`.
+/// `absorber-studies stability`: runs the matrix and the drift study, writes `docs/stability.md`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct StabilityArgs {
     /// Markdown output.
@@ -1800,7 +1801,7 @@ pub fn command(args: &StabilityArgs) -> anyhow::Result<()> {
         Length::Full
     };
     // The document's directory: writable and ours before hours of computation.
-    let (mut out_dir, out_name) = crate::output::OutputDir::for_file(&args.out, "stability")?;
+    let (mut out_dir, out_name) = host_sim::output::OutputDir::for_file(&args.out, "stability")?;
     let mut cases = matrix(length);
     if let Some(only) = &args.only {
         cases.retain(|c| c.group.contains(only.as_str()) || c.name.contains(only.as_str()));
@@ -1864,7 +1865,7 @@ pub fn command(args: &StabilityArgs) -> anyhow::Result<()> {
         t0.elapsed().as_secs_f64(),
     );
     out_dir.write(&out_name, &md)?;
-    out_dir.commit(crate::output::Status::Complete, serde_json::Value::Null)?;
+    out_dir.commit(host_sim::output::Status::Complete, serde_json::Value::Null)?;
     let known = results
         .iter()
         .filter(|(c, o)| !o.passes(&c.expect) && c.known_issue.is_some())
@@ -1893,9 +1894,9 @@ pub fn report(
 ) -> String {
     let mut s = String::new();
     let cmd = if args.quick {
-        "cargo run --release -p host-sim -- stability --quick"
+        "cargo run --release -p absorber-studies -- stability --quick"
     } else {
-        "cargo run --release -p host-sim -- stability"
+        "cargo run --release -p absorber-studies -- stability"
     };
     let _ = writeln!(s, "# Numerical stability on stiff and extreme cases\n");
     let _ = writeln!(

@@ -11,7 +11,7 @@
 //! converged model by more than that fails. `cargo test --test accuracy -- --nocapture`
 //! prints the measured values.
 
-use host_sim::accuracy::{
+use absorber_studies::accuracy::{
     compare, embedded_f1, full_f1, peak_dynamic, reference_config, run_embedded, run_full, scenes,
     Config, Errors, TestScene, Trajectory,
 };

@@ -300,7 +300,7 @@ impl FullSolver {
 
     /// A local gradient `g` (over the 10 local coordinates) on the independent coordinates of
     /// `mode`: `gᵀ B` (zero on the beam's interior coordinates).
-    pub(in crate::full) fn ind_gradient(
+    pub(crate) fn ind_gradient(
         &self,
         mode: Mode,
         kin: &super::super::partition::Kin,

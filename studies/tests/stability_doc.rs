@@ -1,4 +1,4 @@
-//! The committed docs/stability.md says what `host-sim stability` says today: the hardest
+//! The committed docs/stability.md says what `absorber-studies stability` says today: the hardest
 //! extreme cases (50 mm at 4.13 Hz, 3.4 g, on the core in f32 and f64) run again through the
 //! binary under test and their outcome and simulated time must equal the committed rows. (The
 //! document once showed "✅ 20 s bounded" for f32 at 50 mm while the command failed at 6.04 s.)
@@ -26,7 +26,7 @@ fn committed_stability_rows_are_what_the_command_prints() {
     let committed = rows(&doc, case);
     assert_eq!(committed.len(), 2, "{committed:?}");
     let out = std::env::temp_dir().join(format!("stability-{}.md", std::process::id()));
-    let o = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+    let o = Command::new(env!("CARGO_BIN_EXE_absorber-studies"))
         .args(["stability", "--only", case, "--out"])
         .arg(&out)
         .output()
@@ -36,7 +36,7 @@ fn committed_stability_rows_are_what_the_command_prints() {
     assert_eq!(
         now,
         committed,
-        "docs/stability.md is out of date with `host-sim stability` (regenerate it: cargo run --release -p host-sim -- stability); stderr: {}",
+        "docs/stability.md is out of date with `absorber-studies stability` (regenerate it: cargo run --release -p absorber-studies -- stability); stderr: {}",
         String::from_utf8_lossy(&o.stderr)
     );
 }

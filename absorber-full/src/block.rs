@@ -468,7 +468,7 @@ fn lu4(a: &mut Block) -> Option<([usize; 4], [f64; 4])> {
 
 #[cfg(test)]
 mod tests {
-    use crate::full::matrix::{Linear, Matrix};
+    use crate::matrix::{Linear, Matrix};
 
     /// A block-tridiagonal matrix with a border (the shape of the full solver's matrices),
     /// diagonally weighted so that no pivoting across blocks is needed but some inside the

@@ -69,6 +69,10 @@
 //! restart and modes in `statics`; forces, energies and the [`Simulator`](crate::sim::Simulator)
 //! interface in `outputs`; the load vector and mass products of the energy balance in
 //! `balance`. This file holds the public types, the constructors and the kept scratch.
+//!
+//! [`sim`] is the common face of this solver and the embedded core ([`sim::Simulator`],
+//! [`sim::Observation`]): the host implements it for the core, so every command, report and test
+//! can run either one.
 
 mod assembly;
 mod balance;
@@ -81,6 +85,7 @@ mod matrix;
 mod newton;
 mod outputs;
 mod partition;
+pub mod sim;
 mod sparse;
 mod statics;
 mod step;

@@ -1,7 +1,7 @@
 use super::*;
-use crate::full::kin::{Mode, PHI};
-use crate::full::SceneKind;
+use crate::kin::{Mode, PHI};
 use crate::sim::Simulator;
+use crate::SceneKind;
 use absorber_core::ImpactModel;
 use absorber_core::Params;
 

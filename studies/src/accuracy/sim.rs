@@ -3,10 +3,10 @@
 //! `at_rest`, so such a model boots with the converged solver).
 
 use super::Body;
-use crate::core_sim::{build_from, Start};
-use crate::scene::{Kind, Precision};
-use crate::sim::Simulator;
 use absorber_core::{Error, Params};
+use absorber_full::sim::Simulator;
+use host_sim::core_sim::{build_from, Start};
+use host_sim::scene::{Kind, Precision};
 
 /// The embedded core for `body` with `n` elements in `f32` or `f64`, at rest with input `a0`.
 pub fn build_embedded(

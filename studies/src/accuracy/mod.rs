@@ -1,6 +1,6 @@
 //! Error against run time: how far an embedded configuration (element count, step,
 //! precision, Newton budget) is from a converged reference of the full solver, and what it
-//! costs. `host-sim accuracy` regenerates `docs/accuracy.md` and `docs/img/accuracy_*.png`.
+//! costs. `absorber-studies accuracy` regenerates `docs/accuracy.md` and `docs/img/accuracy_*.png`.
 //!
 //! **The truth.** Newmark with γ > ½ damps (ζ ≈ (γ − ½) ω h / 2): the paper's steady states
 //! rely on that damping, and it vanishes as h → 0. A reference at a small step with the paper's
@@ -17,10 +17,10 @@ pub mod cap;
 pub mod report;
 pub mod sim;
 
-use crate::full::{FullSolver, SceneKind};
-use crate::scene::Precision;
 use absorber_core::{NewtonKind, Params};
+use absorber_full::{FullSolver, SceneKind};
 use anyhow::{anyhow, Result};
+use host_sim::scene::Precision;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -250,9 +250,9 @@ pub struct Noise {
 
 impl Noise {
     /// `count` components spread evenly (jittered) over `[f_lo, f_hi]` Hz, random phases from
-    /// `seed` ([`crate::wind::Rng`]), equal amplitudes giving the RMS `rms` \[m/s²\].
+    /// `seed` ([`host_sim::wind::Rng`]), equal amplitudes giving the RMS `rms` \[m/s²\].
     pub fn new(seed: u64, count: usize, f_lo: f64, f_hi: f64, rms: f64) -> Self {
-        let mut rng = crate::wind::seeded(seed);
+        let mut rng = host_sim::wind::seeded(seed);
         let mut uniform = move || rand::RngExt::random::<f64>(&mut rng);
         let amp = rms * (2.0 / count as f64).sqrt();
         let parts = (0..count)
@@ -416,7 +416,7 @@ pub trait Probe {
     fn static_tip(&self) -> f64;
 }
 
-impl<S: crate::sim::Simulator + ?Sized> Probe for S {
+impl<S: absorber_full::sim::Simulator + ?Sized> Probe for S {
     fn advance(&mut self, a: f64) -> Result<(u32, Option<f64>), String> {
         let r = self.step(a).map_err(|e| format!("{e:?}"))?;
         Ok((r.iterations, r.impact.map(|i| i.time)))
@@ -509,7 +509,7 @@ pub fn simulate<P: Probe + ?Sized>(
 }
 
 /// Builds the embedded core for `cfg` and `scene`, at rest with the scene's input at t = 0.
-pub fn embedded(cfg: &Config, scene: &TestScene) -> Result<Box<dyn crate::sim::Simulator>> {
+pub fn embedded(cfg: &Config, scene: &TestScene) -> Result<Box<dyn absorber_full::sim::Simulator>> {
     build_embedded(
         scene.body,
         cfg.elements,
@@ -561,10 +561,10 @@ pub fn reference_config(n: usize, h: f64) -> Config {
 /// solver with `reference` elements (Table 1, ball locked; f₁, f₂, the free-ball beam mode,
 /// the static sag).
 pub fn calibrated(cfg: Config, reference: usize) -> Result<Config> {
-    let mut scene = crate::scene::Scene::paper();
-    scene.file.kind = crate::scene::Kind::Locked;
-    let (r, free) = crate::calibrate::reference(&scene, reference)?;
-    let fit = crate::calibrate::fit(&scene, cfg.elements, &r, free)?;
+    let mut scene = host_sim::scene::Scene::paper();
+    scene.file.kind = host_sim::scene::Kind::Locked;
+    let (r, free) = host_sim::calibrate::reference(&scene, reference)?;
+    let fit = host_sim::calibrate::fit(&scene, cfg.elements, &r, free)?;
     let c = fit.calibration;
     Ok(
         cfg.with(|x| {
@@ -598,7 +598,7 @@ pub fn cached_full(
         }
     }
     let t = run_full(cfg, scene, duration)?;
-    crate::output::atomic_write(&path, serde_json::to_string(&t)?.as_bytes())?;
+    host_sim::output::atomic_write(&path, serde_json::to_string(&t)?.as_bytes())?;
     Ok(t)
 }
 

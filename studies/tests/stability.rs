@@ -1,9 +1,11 @@
-//! The stability matrix (`host_sim::stability`), short runs: stiff and extreme cases, bad input
+//! The stability matrix (`absorber_studies::stability`), short runs: stiff and extreme cases, bad input
 //! sequences, both solvers, f32 and f64. Each case is bounded by the base's work
 //! (`E − E₀ ≤ W + ε`), NaN-free, or fails with the expected clear error and keeps its state.
-//! The long runs and the drift study are in `host-sim stability` (docs/stability.md).
+//! The long runs and the drift study are in `absorber-studies stability` (docs/stability.md).
 
-use host_sim::stability::{matrix, run_all, run_case, Bodies, Case, Engine, Expect, Input, Length};
+use absorber_studies::stability::{
+    matrix, run_all, run_case, Bodies, Case, Engine, Expect, Input, Length,
+};
 
 #[test]
 fn quick_stability_matrix() {
@@ -46,8 +48,8 @@ fn quick_stability_matrix() {
 #[test]
 fn full_and_core_momenta_agree() {
     use absorber_core::{FreeBallModel, Model, Params};
-    use host_sim::full::{FullSolver, SceneKind};
-    use host_sim::stability::FullProbe;
+    use absorber_full::{FullSolver, SceneKind};
+    use absorber_studies::stability::FullProbe;
     let p = Params::<f64>::default();
     let mut core: FreeBallModel<f64, 3, 13> = Model::at_rest(p, 0.0).unwrap();
     let mut full = FullProbe {
@@ -94,7 +96,7 @@ fn full_and_core_momenta_agree() {
                 .max((y_of(&full) - y0 - 0.5 * h * (p0 + full.vertical_momentum())).abs() / h);
         }
         worst = worst.max((core.vertical_momentum() - full.vertical_momentum()).abs());
-        use host_sim::sim::Simulator;
+        use absorber_full::sim::Simulator;
         vdiff = vdiff.max((core.tip_velocity() - full.solver.observe().tip_velocity).abs());
         vmax = vmax.max(core.tip_velocity().abs());
         largest = largest.max(core.vertical_momentum().abs());
@@ -221,7 +223,7 @@ fn modified_newton_at_5_ms_follows_full_newton() {
         (worst, amp)
     }
     let h = 5e-3;
-    let (gamma, beta, c) = host_sim::accuracy::integrator_for(h);
+    let (gamma, beta, c) = absorber_studies::accuracy::integrator_for(h);
     let mut p = Params::<f64>::default();
     p.integrator.step = h;
     p.integrator.gamma = gamma;

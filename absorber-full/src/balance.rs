@@ -73,8 +73,8 @@ impl FullSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::full::SceneKind;
     use crate::sim::Simulator;
+    use crate::SceneKind;
     use absorber_core::{ArmParams, Params};
     use rand::rngs::ChaCha8Rng;
     use rand::{RngExt, SeedableRng};
@@ -82,7 +82,7 @@ mod tests {
     /// The shipped mast arm's parameters and arm (N = 3).
     fn mast_arm() -> (Params<f64>, ArmParams<f64>) {
         let sc =
-            crate::scene::Scene::from_toml(include_str!("../../../scenes/mast-arm.toml")).unwrap();
+            host_sim::scene::Scene::from_toml(include_str!("../../scenes/mast-arm.toml")).unwrap();
         let arm = sc.file.arm.as_ref().unwrap().params().unwrap();
         (sc.params().unwrap(), arm)
     }

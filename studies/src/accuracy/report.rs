@@ -1,9 +1,9 @@
-//! `host-sim accuracy`: the whole study and the generated `docs/accuracy.md`.
+//! `absorber-studies accuracy`: the whole study and the generated `docs/accuracy.md`.
 
 use super::*;
-use crate::plot::{render, Panel, Series};
 use anyhow::{Context, Result};
 use clap::Args;
+use host_sim::plot::{render, Panel, Series};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 
@@ -309,7 +309,7 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     );
     // The report directory writable and ours (one command at a time) before any computation;
     // the files themselves are written atomically.
-    let _lock = crate::output::OutputDir::open(&out, None, "accuracy")?;
+    let _lock = host_sim::output::OutputDir::open(&out, None, "accuracy")?;
     // 1. Convergence of the reference.
     let conv = convergence(&p, &cache)?;
     eprintln!(
@@ -420,7 +420,7 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     std::fs::create_dir_all(out.join("img"))
         .with_context(|| format!("cannot create `{}`", out.join("img").display()))?;
     let md = ctx.write(&out, a.quick, started)?;
-    crate::output::atomic_write(&out.join("accuracy.md"), md.as_bytes())?;
+    host_sim::output::atomic_write(&out.join("accuracy.md"), md.as_bytes())?;
     eprintln!(
         "accuracy: wrote {} ({:.0} s)",
         out.join("accuracy.md").display(),
@@ -529,9 +529,9 @@ impl Ctx {
         let p = &self.p;
         let mut m = String::new();
         let cmd = if quick {
-            "cargo run --release -p host-sim -- accuracy --quick"
+            "cargo run --release -p absorber-studies -- accuracy --quick"
         } else {
-            "cargo run --release -p host-sim -- accuracy"
+            "cargo run --release -p absorber-studies -- accuracy"
         };
         writeln!(m, "# Error against run time of the embedded model\n")?;
         writeln!(
@@ -546,7 +546,7 @@ impl Ctx {
         writeln!(m, "## 1. The reference and its convergence\n")?;
         writeln!(
             m,
-            "Reference: `host_sim::full::FullSolver`, **N = {}**, **h = {} ms**, `f64`, full Newton \
+            "Reference: `absorber_full::FullSolver`, **N = {}**, **h = {} ms**, `f64`, full Newton \
              to **1e-10**, damping-matched integrator (γ = {:.3}, β = {:.4}, C = {:.2e} s · K_t). \
              Full-solver cost at this size: {:.1} s of host time per simulated second.\n",
             self.rcfg.elements,
@@ -891,7 +891,7 @@ impl Ctx {
     }
 
     fn plot_pareto(&self, out: &Path, pts: &[(f64, f64)], front: &[bool]) -> Result<()> {
-        crate::output::atomic_with(&out.join("img/accuracy_pareto.png"), |p| {
+        host_sim::output::atomic_with(&out.join("img/accuracy_pareto.png"), |p| {
             self.plot_pareto_at(p, pts, front)
         })
     }

@@ -7,8 +7,8 @@
 //! reference the block LU replaced, at N = 16 and 64.
 
 use absorber_core::Params;
+use absorber_full::{FullSolver, Linear, SceneKind};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use host_sim::full::{FullSolver, Linear, SceneKind};
 use std::hint::black_box;
 
 fn accel(k: u64) -> f64 {
