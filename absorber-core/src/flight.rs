@@ -541,7 +541,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         self.take_off(&mut mid, ws, report)?;
         self.note_lift(&mut mid, T::zero(), report);
         report.separation = Some(mid.time);
-        self.flying_rest(&mut mid, h - h1, base_accel, ws, report, next)?;
+        self.rest_in_flight(&mut mid, h - h1, base_accel, ws, report, next)?;
         // Landed in the rest of the step: a pulling track lets it go again at the end.
         self.take_off_at_end(start, next, ws, report)
     }
@@ -617,13 +617,29 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
 
     /// The rest `h_rest` of a step after an event at `mid` that left the ball flying (a
     /// take-off, a stop hit in flight, a bounce), to the input `base_accel`; a stop or a landing
-    /// at its end is applied there (no further split) — but for a perfectly elastic ball
-    /// ([`Self::perfectly_elastic`]), whose later events are split at their crossings too. The
-    /// rolling rest is [`Self::landed_rest`]: kept apart, the static stack bound does not count
-    /// a chain (take-off, then a rolling rest) that no step can take. `mid` is scratch on
-    /// return.
+    /// at its end is applied there (no further split; a perfectly elastic ball's are split,
+    /// [`Self::rest_in_flight`]). The rolling rest is [`Self::landed_rest`]: kept apart, the
+    /// static stack bound does not count a chain (take-off, then a rolling rest) that no step
+    /// can take.
     #[inline(never)]
     fn flying_rest(
+        &self,
+        mid: &State<T, D>,
+        h_rest: T,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+        end: &mut State<T, D>,
+    ) -> Result<(), Error> {
+        self.sub_step(mid, h_rest, base_accel, ws, report, end)?;
+        self.events_at_rest_end(mid, end, h_rest, ws, report)
+    }
+
+    /// The flying rest of a step after an event at `mid`: [`Self::flying_rest`], or for a
+    /// perfectly elastic ball [`Self::split_rest`] (chosen here, in the caller's frame: the
+    /// split does not deepen the static stack bound's chain).
+    #[inline(always)]
+    fn rest_in_flight(
         &self,
         mid: &mut State<T, D>,
         h_rest: T,
@@ -632,11 +648,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         report: &mut StepReport<T>,
         end: &mut State<T, D>,
     ) -> Result<(), Error> {
-        self.sub_step(mid, h_rest, base_accel, ws, report, end)?;
         if self.perfectly_elastic() {
-            return self.split_rest(mid, h_rest, base_accel, ws, report, end);
+            self.split_rest(mid, h_rest, base_accel, ws, report, end)
+        } else {
+            self.flying_rest(mid, h_rest, base_accel, ws, report, end)
         }
-        self.events_at_rest_end(mid, end, h_rest, ws, report)
     }
 
     /// The events of a flight step's rest from `mid` to `end` (`len` apart) that act at its end
@@ -714,13 +730,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         })
     }
 
-    /// [`Self::flying_rest`] of a perfectly elastic ball: `end` is the rest's trial from `mid`
-    /// over `h_rest`; while it holds an event, the rest is redone to the event's crossing, the
-    /// event acts there, and the rest goes on from it (`mid` and `end` take turns; no state of
-    /// its own in the frame). After [`MAX_SPLITS`] splits, or when the work cap cannot afford
-    /// another, the events left act at the end, as in [`Self::flying_rest`]; so does a landing
-    /// that would roll on (a rebound slower than the stick speed). The extra splits keep the
-    /// sub-step's accelerations (the trapezoidal rule's choice, [`System::event_accel`]).
+    /// [`Self::flying_rest`] of a perfectly elastic ball: `end` becomes the rest's trial from
+    /// `mid` over `h_rest`; while it holds an event, the rest is redone to the event's
+    /// crossing, the event acts there, and the rest goes on from it (`mid` and `end` take
+    /// turns: no state of its own in the frame; `mid` is scratch on return). After
+    /// [`MAX_SPLITS`] splits, or when the work cap cannot afford another, the events left act
+    /// at the end, as in [`Self::flying_rest`]; so does a landing that would roll on (a rebound
+    /// slower than the stick speed). The extra splits keep the sub-step's accelerations (the
+    /// trapezoidal rule's choice, [`System::event_accel`]).
     #[inline(never)]
     #[cold]
     fn split_rest(
@@ -732,6 +749,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         report: &mut StepReport<T>,
         end: &mut State<T, D>,
     ) -> Result<(), Error> {
+        self.sub_step(mid, h_rest, base_accel, ws, report, end)?;
         let mut len = h_rest;
         for _ in 0..MAX_SPLITS {
             let Some(event) = self.first_flight_event(mid, end, len) else {
@@ -849,7 +867,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
         }
         if mid.contact == Contact::InFlight {
-            self.flying_rest(&mut mid, h - h1, base_accel, ws, report, trial)?;
+            self.rest_in_flight(&mut mid, h - h1, base_accel, ws, report, trial)?;
         } else {
             self.landed_rest(&mid, h - h1, base_accel, ws, report, trial)?;
         }
