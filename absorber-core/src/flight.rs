@@ -678,7 +678,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     }
 
     /// A perfectly elastic ball: every contact it can have is elastic (`ball.restitution` 1,
-    /// and `ball.landing_restitution` 1 if it may fly). Its impulses keep the kinetic energy
+    /// and `ball.landing_restitution` 1 if it may fly), its events at their crossings (with
+    /// events at the step end every event is late, and the kinematic law and its cost stay: the
+    /// firmware, which runs them so, is unchanged). Its impulses keep the kinetic energy
     /// exactly in either metric ([`crate::stops`]), and every event of its flight steps is split
     /// at its crossing (up to [`MAX_SPLITS`]), so that none is applied late. A late event acts
     /// where the ball has gone on beyond the circle or the stop line for the rest of the step,
@@ -690,7 +692,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     #[inline]
     pub(crate) fn perfectly_elastic(&self) -> bool {
         let b = &self.params.ball;
-        b.restitution >= T::one() && (b.landing_restitution >= T::one() || !self.flies())
+        b.restitution >= T::one()
+            && (b.landing_restitution >= T::one() || !self.flies())
+            && !self.events_at_step_end()
     }
 
     /// The first event of a flying ball between `start` and `trial`, `h` apart: a landing (the
