@@ -53,11 +53,6 @@ use absorber_core::{Contact, Error, Landing, Side, StepReport};
 /// stops (put on the stop by an impact, to rounding): the core's `stops::BEYOND_MARGIN`.
 pub(super) const BEYOND_MARGIN: f64 = 1e-3;
 
-/// A flying ball that hits a stop from the arc beyond it is put this far beyond the stop line
-/// \[rad\] (the core's `flight::BEYOND_OFFSET`), so that it starts the rest of its step, moving
-/// away from the stop, on the side it came from.
-pub(super) const BEYOND_OFFSET: f64 = 1e-5;
-
 /// `x > 0` (false for NaN).
 fn positive(x: f64) -> bool {
     x > 0.0
@@ -187,19 +182,8 @@ impl FullSolver {
         self.relative(s).r > b.path_radius() - b.radius
     }
 
-    /// A ball at relative angle `alpha` moving at `rate` starts a step between the stops: there,
-    /// or within [`BEYOND_MARGIN`] beyond a stop and not moving away from the track (a ball put
-    /// on the stop line by an impact from between the stops sits on it to rounding). A ball
-    /// there moving away from the track came from beyond: an impact from the arc beyond left it
-    /// on the line (counted between the stops, it got a second, spurious impulse from the
-    /// stop's track face that sent it back through the stop).
-    pub(super) fn starts_inside(&self, alpha: f64, rate: f64) -> bool {
-        let stop = self.params.ball.stop_angle;
-        alpha.abs() <= stop || (!positive(alpha * rate) && alpha.abs() <= stop + BEYOND_MARGIN)
-    }
-
     /// A stop met by the flying ball between `from` and `to` (spec rule 3 with revision 4):
-    /// side, whether it came from between the stops ([`Self::starts_inside`], as on the
+    /// side, whether it came from between the stops (within [`BEYOND_MARGIN`], as on the
     /// track), crossing fraction.
     fn stop_crossing(&self, from: &FullState, to: &FullState) -> Option<(Side, bool, f64)> {
         if !self.scene.stops() || !self.at_stop_height(from) || !self.at_stop_height(to) {
@@ -207,10 +191,10 @@ impl FullSolver {
         }
         let stop = self.params.ball.stop_angle;
         let (alpha0, alpha1) = self.branch_angles(from, to);
-        // A ball put onto the stop line by a stop impact sits on it to rounding: it starts on
-        // the side it came from (without the margin, a start at α_max + 1 ulp counted as
-        // beyond the stop and the impulse of the rest of the step was reversed).
-        let inside = self.starts_inside(alpha0, self.relative_rate(from));
+        // A ball put onto the stop line by a stop impact sits on it to rounding: it starts
+        // between the stops (the rolling rule's margin; without it, a start at α_max + 1 ulp
+        // counted as beyond the stop and the impulse of the rest of the step was reversed).
+        let inside = alpha0.abs() <= stop + BEYOND_MARGIN;
         if inside == (alpha1.abs() <= stop) {
             return None;
         }
@@ -446,7 +430,7 @@ impl FullSolver {
             // the arc beyond, the stop's other face pushes it back (never sticks).
             let stop = self.params.ball.stop_angle;
             let (a0, a1) = self.branch_angles(mid, &end);
-            let inside = self.starts_inside(a0, self.relative_rate(mid));
+            let inside = a0.abs() <= stop + BEYOND_MARGIN;
             if inside != (a1.abs() <= stop) {
                 let outer = if inside { a1 } else { a0 };
                 let side = if outer > 0.0 {

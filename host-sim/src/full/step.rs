@@ -4,7 +4,7 @@
 
 use super::kin::{Mode, NW, PHI};
 use super::newton::Solved;
-use super::{zeros, FullSolver, FullState, Work};
+use super::{flight, zeros, FullSolver, FullState, Work};
 use absorber_core::newmark::AlphaRecursion;
 use absorber_core::tip::Chain;
 use absorber_core::{Contact, Error, Impact, ImpactModel, NewtonKind, Side, StepReport};
@@ -225,7 +225,7 @@ impl FullSolver {
                     return Ok(next);
                 }
                 let (a0, a1) = self.branch_angles(start, &next);
-                let inside = self.starts_inside(a0, self.relative_rate(start));
+                let inside = a0.abs() <= stop + flight::BEYOND_MARGIN;
                 if inside == (a1.abs() <= stop) {
                     return Ok(next);
                 }

@@ -246,12 +246,7 @@ impl FullSolver {
         let ball = &self.params.ball;
         let psi = s.q[self.zloc(PSI)];
         let rel = self.relative(s);
-        let line = if inside {
-            ball.stop_angle
-        } else {
-            ball.stop_angle + super::BEYOND_OFFSET
-        };
-        let theta = psi + side.sign::<f64>() * line;
+        let theta = psi + side.sign::<f64>() * ball.stop_angle;
         let (sin, cos) = theta.sin_cos();
         let (a, _) = self.end_point(s);
         let (i1, i2) = (self.zloc(RB1), self.zloc(RB2));
