@@ -58,10 +58,14 @@
 //! Impulses use the stops' metric ([`crate::ImpactModel`]): the step's Newmark matrix by default
 //! (an impulse in the mass-matrix metric kicks the housing's stiff end-rotation mode; a stop's
 //! with its own contact time when `ball.stop_contact_time` is set), the mass matrix for an
-//! instantaneous impact. After an impulse the accelerations go on from before it
+//! instantaneous impact. A perfectly elastic ball's impulses keep the kinetic energy in either
+//! metric ([`crate::stops`]), and it has every event of a step split at its crossing
+//! ([`System::perfectly_elastic`]; docs/model.md, "Elastic bounces at the paper's step").
+//! After an impulse the accelerations go on from before it
 //! ([`System::after_impulse`]); a take-off and a rolling landing (a change of mode) restart from
-//! the consistent acceleration of the new mode. At most one event splits a step; an event found
-//! at the end of the rest of the step is applied there, and a ball on the track at the end of an
+//! the consistent acceleration of the new mode. At most one event splits a step (every event,
+//! up to four, for a perfectly elastic ball); an event found at the end of the rest of the step
+//! is applied there, and a ball on the track at the end of an
 //! event step takes off there if the track pulls (`take_off_at_end`). The step report counts
 //! every event ([`crate::EventCounts`]). With events at the step end
 //! ([`crate::EventLocation::StepEnd`]) nothing splits a step: the events act at its end, without
@@ -76,9 +80,34 @@ use crate::system::System;
 use crate::tip;
 use nalgebra::SVector;
 
-/// A flying ball whose polar angle starts a step this close beyond a stop \[rad\] is still on
-/// the track's side of it (an impact put it on the stop line, to rounding).
+/// A flying ball whose polar angle starts a step this close beyond a stop \[rad\], moving
+/// back towards the track, is still on the track's side of it (an impact put it on the stop
+/// line, to rounding).
 const STOP_MARGIN: f64 = 1e-3;
+
+/// A perfectly elastic flying ball ([`System::perfectly_elastic`]) that hits a stop from the
+/// arc beyond it is put this far beyond the stop line \[rad\] (0.3 µm at the stops' height;
+/// above the rounding of the polar angle in `f32`), so that it starts the rest of its step,
+/// moving away from the stop, on the side it came from.
+const BEYOND_OFFSET: f64 = 1e-5;
+
+/// Events split at their crossings in the rest of one flight step of a perfectly elastic ball
+/// ([`System::perfectly_elastic`]), beyond the step's first.
+const MAX_SPLITS: usize = 3;
+
+/// The first event of a flight step ([`System::first_flight_event`]).
+#[derive(Clone, Copy)]
+struct FlightEvent<T> {
+    /// Its fraction of the step.
+    tau: T,
+    /// A stop (its side and whether the ball hits it from the track's side), or `None`: a
+    /// landing.
+    stop: Option<(Side, bool)>,
+    /// The normal speed at the landing's crossing, if the step ends beyond the circle.
+    landing_speed: Option<T>,
+    /// The stop crossed in the step, if any (first or not).
+    crossed_stop: Option<(Side, bool)>,
+}
 
 /// A ball meeting the circle slower than this along the normal \[m/s\] grazes it: no impulse,
 /// it flies on. A ball that took off at a step's end meets the circle again at the next step's
@@ -319,6 +348,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         &self,
         from: &State<T, D>,
         to: &State<T, D>,
+        h: T,
     ) -> Option<(Side, bool, T)> {
         if !S::STOPS || !self.at_stop_height(from) || !self.at_stop_height(to) {
             return None;
@@ -327,9 +357,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let (alpha0, rate0) = self.flight_relative_angle(from);
         let (raw1, rate1) = self.flight_relative_angle(to);
         let alpha1 = alpha0 + wrap(raw1 - alpha0);
-        // A ball just put on the stop line by an impact (to rounding) is still on the track's
-        // side: without the margin the rest of the step would reverse its impulse.
-        let inside = alpha0.abs() <= stop + lit(STOP_MARGIN);
+        // A ball just put on the stop line by an impact (to rounding) is on the side it came
+        // from: from the track's side it moves back towards the track, and the margin keeps it
+        // there (without it the rest of the step would reverse its impulse). From beyond, a
+        // perfectly elastic ball is put beyond the line (`BEYOND_OFFSET`) and moves away from
+        // the track; counted on the track's side (as the margin alone does, and still does for
+        // other balls: the default trajectories stay as they were) it gets a second impulse,
+        // from the track's face, at the end of the rest of its step, with the projection there
+        // (the ball moved by up to |α̇|h: 2 % of an elastic bouncing ball's energy).
+        let outward = self.perfectly_elastic() && is_positive(alpha0 * rate0);
+        let inside = alpha0.abs() <= stop || (!outward && alpha0.abs() <= stop + lit(STOP_MARGIN));
         if inside == (alpha1.abs() <= stop) {
             return None;
         }
@@ -340,7 +377,6 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             Side::Negative
         };
         let target = side.sign::<T>() * stop;
-        let h = self.params.integrator.step;
         let tau = hermite_root(alpha0 - target, rate0 * h, alpha1 - target, rate1 * h);
         Some((side, inside, tau))
     }
@@ -505,7 +541,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         self.take_off(&mut mid, ws, report)?;
         self.note_lift(&mut mid, T::zero(), report);
         report.separation = Some(mid.time);
-        self.flying_rest(&mid, h - h1, base_accel, ws, report, next)?;
+        self.rest_in_flight(&mut mid, h - h1, base_accel, ws, report, next)?;
         // Landed in the rest of the step: a pulling track lets it go again at the end.
         self.take_off_at_end(start, next, ws, report)
     }
@@ -581,9 +617,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
 
     /// The rest `h_rest` of a step after an event at `mid` that left the ball flying (a
     /// take-off, a stop hit in flight, a bounce), to the input `base_accel`; a stop or a landing
-    /// at its end is applied there (no further split). The rolling rest is
-    /// [`Self::landed_rest`]: kept apart, the static stack bound does not count a chain
-    /// (take-off, then a rolling rest) that no step can take.
+    /// at its end is applied there (no further split; a perfectly elastic ball's are split,
+    /// [`Self::rest_in_flight`]). The rolling rest is [`Self::landed_rest`]: kept apart, the
+    /// static stack bound does not count a chain (take-off, then a rolling rest) that no step
+    /// can take.
     #[inline(never)]
     fn flying_rest(
         &self,
@@ -595,7 +632,41 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         end: &mut State<T, D>,
     ) -> Result<(), Error> {
         self.sub_step(mid, h_rest, base_accel, ws, report, end)?;
-        if let Some((side, inside, _)) = self.stop_crossing(mid, end) {
+        self.events_at_rest_end(mid, end, h_rest, ws, report)
+    }
+
+    /// The flying rest of a step after an event at `mid`: [`Self::flying_rest`], or for a
+    /// perfectly elastic ball [`Self::split_rest`] (chosen here, in the caller's frame: the
+    /// split does not deepen the static stack bound's chain).
+    #[inline(always)]
+    fn rest_in_flight(
+        &self,
+        mid: &mut State<T, D>,
+        h_rest: T,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+        end: &mut State<T, D>,
+    ) -> Result<(), Error> {
+        if self.perfectly_elastic() {
+            self.split_rest(mid, h_rest, base_accel, ws, report, end)
+        } else {
+            self.flying_rest(mid, h_rest, base_accel, ws, report, end)
+        }
+    }
+
+    /// The events of a flight step's rest from `mid` to `end` (`len` apart) that act at its end
+    /// (no further split): the stop crossed, then the landing if the ball ended beyond the
+    /// circle.
+    fn events_at_rest_end(
+        &self,
+        mid: &State<T, D>,
+        end: &mut State<T, D>,
+        len: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+    ) -> Result<(), Error> {
+        if let Some((side, inside, _)) = self.stop_crossing(mid, end, len) {
             let impact = self.stop_in_flight(end, side, inside, ws)?;
             report.impact = report.impact.or(Some(impact));
             report.events.impacts += 1;
@@ -604,6 +675,124 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             self.land(end, ws, report)?;
         }
         Ok(())
+    }
+
+    /// A perfectly elastic ball: every contact it can have is elastic (`ball.restitution` 1,
+    /// and `ball.landing_restitution` 1 if it may fly), its events at their crossings (with
+    /// events at the step end every event is late, and the kinematic law and its cost stay: the
+    /// firmware, which runs them so, is unchanged). Its impulses keep the kinetic energy
+    /// exactly in either metric ([`crate::stops`]), and every event of its flight steps is split
+    /// at its crossing (up to [`MAX_SPLITS`]), so that none is applied late. A late event acts
+    /// where the ball has gone on beyond the circle or the stop line for the rest of the step,
+    /// and its projection back moves the ball by up to its speed times the step: with
+    /// e = e_n = 1 that changes the energy, which nothing then removes (1–2 % of the drop energy
+    /// of a ball bouncing in a stiff housing, at a stop impact followed by a landing within one
+    /// 3 ms step). Other balls keep the kinematic rebound law and one split a step (a late
+    /// impact is then a lossy one; docs/model.md): their trajectories are those of before.
+    #[inline]
+    pub(crate) fn perfectly_elastic(&self) -> bool {
+        let b = &self.params.ball;
+        b.restitution >= T::one()
+            && (b.landing_restitution >= T::one() || !self.flies())
+            && !self.events_at_step_end()
+    }
+
+    /// The first event of a flying ball between `start` and `trial`, `h` apart: a landing (the
+    /// cubic Hermite root of `|c − A| − ρ`, and the normal speed there) or a stop crossed in
+    /// flight, whichever comes first.
+    fn first_flight_event(
+        &self,
+        start: &State<T, D>,
+        trial: &State<T, D>,
+        h: T,
+    ) -> Option<FlightEvent<T>> {
+        let rho = self.params.ball.path_radius();
+        let mut tau = T::one();
+        let mut event = None;
+        let mut landing_speed = None;
+        let end_rel = self.relative(trial);
+        if end_rel.r > rho {
+            let (r0, r1) = (self.relative(start), end_rel);
+            let rate = |r: &Relative<T>| (r.d[0] * r.rate[0] + r.d[1] * r.rate[1]) / r.r;
+            let (d0, m0, d1, m1) = (r0.r - rho, rate(&r0) * h, r1.r - rho, rate(&r1) * h);
+            tau = hermite_root(d0, m0, d1, m1);
+            event = Some(None);
+            landing_speed = Some(hermite_rate(d0, m0, d1, m1, tau) / h);
+        }
+        let stop = self.stop_crossing(start, trial, h);
+        if let Some((side, inside, t)) = stop {
+            if event.is_none() || t < tau {
+                tau = t;
+                event = Some(Some((side, inside)));
+            }
+        }
+        event.map(|stop_event| FlightEvent {
+            tau,
+            stop: stop_event,
+            landing_speed,
+            crossed_stop: stop.map(|(side, inside, _)| (side, inside)),
+        })
+    }
+
+    /// [`Self::flying_rest`] of a perfectly elastic ball: `end` becomes the rest's trial from
+    /// `mid` over `h_rest`; while it holds an event, the rest is redone to the event's
+    /// crossing, the event acts there, and the rest goes on from it (`mid` and `end` take
+    /// turns: no state of its own in the frame; `mid` is scratch on return). After
+    /// [`MAX_SPLITS`] splits, or when the work cap cannot afford another, the events left act
+    /// at the end, as in [`Self::flying_rest`]; so does a landing that would roll on (a rebound
+    /// slower than the stick speed). The extra splits keep the sub-step's accelerations (the
+    /// trapezoidal rule's choice, [`System::event_accel`]).
+    #[inline(never)]
+    #[cold]
+    fn split_rest(
+        &self,
+        mid: &mut State<T, D>,
+        h_rest: T,
+        base_accel: T,
+        ws: &mut Workspace<T, D>,
+        report: &mut StepReport<T>,
+        end: &mut State<T, D>,
+    ) -> Result<(), Error> {
+        self.sub_step(mid, h_rest, base_accel, ws, report, end)?;
+        let mut len = h_rest;
+        for _ in 0..MAX_SPLITS {
+            let Some(event) = self.first_flight_event(mid, end, len) else {
+                return Ok(());
+            };
+            // A landing that would roll on is not split (the rolling rest is not chained
+            // here: the static stack bound); it acts at the end.
+            let b = &self.params.ball;
+            let rolls = event.stop.is_none()
+                && event
+                    .landing_speed
+                    .is_none_or(|v| b.landing_restitution * v < b.path_radius() * b.stick_speed);
+            if rolls || !ws.affords_split() {
+                break;
+            }
+            let len1 = event.tau * len;
+            let frac = (len - len1) / len;
+            let accel_mid = base_accel + (mid.base_accel - base_accel) * frac;
+            let t1 = mid.time + len1;
+            self.sub_step(mid, len1, accel_mid, ws, report, end)?;
+            end.time = t1;
+            match event.stop {
+                None => self.land(end, ws, report)?,
+                Some((side, inside)) => {
+                    let impact = self.stop_in_flight(end, side, inside, ws)?;
+                    report.impact = report.impact.or(Some(impact));
+                    report.events.impacts += 1;
+                }
+            }
+            *mid = *end;
+            len -= len1;
+            self.sub_step(mid, len, base_accel, ws, report, end)?;
+            if mid.contact != Contact::InFlight {
+                // Rolled on after all (the landing's own speed was below the stick speed).
+                return Ok(());
+            }
+        }
+        // Events left: at the end (as `flying_rest`).
+        self.events_at_rest_end(mid, end, len, ws, report)
     }
 
     /// The rest `h_rest` of a step after a plastic landing at `mid` (the ball rolling, between
@@ -655,31 +844,16 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         report: &mut StepReport<T>,
     ) -> Result<(), Error> {
         let h = self.params.integrator.step;
-        let rho = self.params.ball.path_radius();
-        let mut tau = T::one();
-        let mut event = None;
-        let mut landing_speed = None;
-        let end_rel = self.relative(trial);
-        if end_rel.r > rho {
-            let (r0, r1) = (self.relative(start), end_rel);
-            let rate = |r: &Relative<T>| (r.d[0] * r.rate[0] + r.d[1] * r.rate[1]) / r.r;
-            let (d0, m0, d1, m1) = (r0.r - rho, rate(&r0) * h, r1.r - rho, rate(&r1) * h);
-            tau = hermite_root(d0, m0, d1, m1);
-            event = Some(None);
-            landing_speed = Some(hermite_rate(d0, m0, d1, m1, tau) / h);
-        }
-        let stop = self.stop_crossing(start, trial);
-        if let Some((side, inside, t)) = stop {
-            if event.is_none() || t < tau {
-                tau = t;
-                event = Some(Some((side, inside)));
-            }
-        }
-        let Some(event) = event else {
+        let Some(first) = self.first_flight_event(start, trial, h) else {
             return Ok(());
         };
+        let FlightEvent {
+            tau,
+            stop: event,
+            landing_speed,
+            crossed_stop: stop,
+        } = first;
         if self.event_at_end(ws) {
-            let stop = stop.map(|(side, inside, _)| (side, inside));
             return self.flight_events_at_end(start, trial, stop, landing_speed, ws, report);
         }
         let h1 = tau * h;
@@ -697,7 +871,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
         }
         if mid.contact == Contact::InFlight {
-            self.flying_rest(&mid, h - h1, base_accel, ws, report, trial)?;
+            self.rest_in_flight(&mut mid, h - h1, base_accel, ws, report, trial)?;
         } else {
             self.landed_rest(&mid, h - h1, base_accel, ws, report, trial)?;
         }
@@ -822,11 +996,29 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             if !is_positive(k) {
                 return Err(Error::Singular);
             }
-            let p = match crossing_speed {
+            let mut p = match crossing_speed {
                 None => bounce_impulse(normal_speed, k, ball.landing_restitution),
                 // From the end's normal speed to −e_n times the crossing's.
                 Some(_) => (normal_speed + ball.landing_restitution * speed) / k,
             };
+
+            if crossing_speed.is_none() && self.perfectly_elastic() {
+                // Perfectly elastic: the kinetic energy is kept exactly in any metric. Along
+                // (ball, housing) = (−n/m_b, y): b = −n·ċ + q̇ᵀM y, c = 1/m_b + yᵀM y.
+                if let Some(e) = self
+                    .mass_products(s, Contact::InFlight, &mut y, ws)
+                    .and_then(|(uy, yy)| {
+                        let b = uy - (n[0] * before[0] + n[1] * before[1]);
+                        crate::stops::energy_exact_impulse(
+                            -normal_speed,
+                            b,
+                            T::one() / ball.mass + yy,
+                        )
+                    })
+                {
+                    p = e;
+                }
+            }
             s.v.axpy(p, &y, T::one());
             for (c, nk) in s.flight.velocity.iter_mut().zip(n.iter()) {
                 *c -= p / ball.mass * *nk;
@@ -915,7 +1107,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let x = Self::local(&s.q, &s.v, &s.a);
         let (psi, _) = tip::psi_and_rate(&x);
         let rel = self.relative(s);
-        let theta = psi + side.sign::<T>() * ball.stop_angle;
+        let line = if inside || !self.perfectly_elastic() {
+            ball.stop_angle
+        } else {
+            ball.stop_angle + lit(BEYOND_OFFSET)
+        };
+        let theta = psi + side.sign::<T>() * line;
         let (sin, cos) = theta.fast_sin_cos();
         let (a, _) = self.end_point(s);
         s.flight.centre = [a[0] + rel.r * sin, a[1] - rel.r * cos];
@@ -956,7 +1153,23 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             if !is_positive(k) {
                 return Err(Error::Singular);
             }
-            let lambda = -(T::one() + e) * speed / k;
+            let mut lambda = -(T::one() + e) * speed / k;
+            if e >= T::one() && self.perfectly_elastic() {
+                // Perfectly elastic: the kinetic energy is kept exactly in any metric. Along
+                // (ball, housing) = ((cos, sin)/(m_b r), y): b = t·ċ/r + q̇ᵀM y,
+                // c = 1/(m_b r²) + yᵀM y.
+                let v = s.flight.velocity;
+                if let Some(l) = self
+                    .mass_products(s, Contact::InFlight, &mut y, ws)
+                    .and_then(|(uy, yy)| {
+                        let b = uy + (cos * v[0] + sin * v[1]) / rel.r;
+                        let c = T::one() / (ball.mass * rel.r * rel.r) + yy;
+                        crate::stops::energy_exact_impulse(speed, b, c)
+                    })
+                {
+                    lambda = l;
+                }
+            }
             s.v.axpy(lambda, &y, T::one());
             let dv = lambda / (ball.mass * rel.r);
             s.flight.velocity[0] += dv * cos;
@@ -1025,9 +1238,18 @@ mod tests {
     /// A flying state on the circle at 40° from the bottom, moving outwards at 0.3 m/s and
     /// along the track at 0.2 m/s relative to a moving housing.
     fn at_landing(e_n: f64) -> (Model<f64, FreeBall, 3, 13>, State<f64, 13>) {
+        at_landing_in(e_n, ImpactModel::Instantaneous)
+    }
+
+    /// [`at_landing`] with the impulse metric `model`.
+    fn at_landing_in(
+        e_n: f64,
+        model: ImpactModel,
+    ) -> (Model<f64, FreeBall, 3, 13>, State<f64, 13>) {
         let mut p = Params::<f64>::default();
         p.ball.landing_restitution = e_n;
-        p.ball.impact_model = ImpactModel::Instantaneous;
+        p.ball.restitution = e_n;
+        p.ball.impact_model = model;
         let m = Model::<f64, FreeBall, 3, 13>::at_rest(p, 0.0).expect("start");
         let mut s = m.state;
         for i in 0..12 {
@@ -1101,6 +1323,204 @@ mod tests {
         let n = [(c[0] - a[0]) / 0.032, (c[1] - a[1]) / 0.032];
         let vn = n[0] * (cd[0] - ad[0]) + n[1] * (cd[1] - ad[1]);
         assert!(vn.abs() < 1e-12, "rolls on: normal speed {vn}");
+    }
+
+    fn empty_report() -> StepReport<f64> {
+        StepReport {
+            iterations: 0,
+            increment: 0.0,
+            impact: None,
+            separation: None,
+            landing: None,
+            work: 0,
+            outcome: crate::Outcome::Converged,
+            events: crate::model::EventCounts::default(),
+        }
+    }
+
+    /// Perfectly elastic impulses in the over-step metric (the default `W = M + γhC + βh²K`,
+    /// here h = 3 ms) keep the kinetic energy to rounding (1e-12 of it): a landing, and a stop
+    /// hit in flight from the track's side and from beyond, on a moving housing. The impulse
+    /// along the metric's direction is the one that conserves it
+    /// ([`crate::stops::energy_exact_impulse`]); the kinematic law of the other restitutions
+    /// (the normal or angular rate reversed exactly in that metric) changed it (measured
+    /// below). The rebound then differs from the reversed rate by the housing's velocity in
+    /// the modes the metric holds back (its stiff modes, here moving at random); on a housing
+    /// at rest by the housing's small share only (checked: 1 %).
+    #[test]
+    fn elastic_impulses_keep_the_kinetic_energy_in_the_over_step_metric() {
+        for moving in [true, false] {
+            let (mut m, mut s) = at_landing_in(1.0, ImpactModel::OverStep);
+            if !moving {
+                // The housing at rest, the ball meeting it at 0.3 m/s along the normal.
+                let (a, _) = m.sys.end_point(&s);
+                let d = [s.flight.centre[0] - a[0], s.flight.centre[1] - a[1]];
+                let r = (d[0] * d[0] + d[1] * d[1]).sqrt();
+                s.v.fill(0.0);
+                let n = [d[0] / r, d[1] / r];
+                s.flight.velocity = [0.3 * n[0] - 0.2 * n[1], 0.3 * n[1] + 0.2 * n[0]];
+            }
+            let before = kinetic(&mut m, &s);
+            let mut ws = Workspace::default();
+            let mut report = empty_report();
+            m.sys.land(&mut s, &mut ws, &mut report).expect("land");
+            assert!(report.landing.expect("landed").bounced);
+            let after = kinetic(&mut m, &s);
+            let rel = m.sys.relative(&s);
+            let vn = (rel.d[0] * rel.rate[0] + rel.d[1] * rel.rate[1]) / rel.r;
+            println!("landing (housing moving: {moving}): {before} → {after}, rebound {vn}");
+            assert!(
+                (after - before).abs() < 1e-12 * before,
+                "{before} → {after}"
+            );
+            assert!(
+                vn < 0.0 && (moving || (vn + 0.3).abs() < 0.01 * 0.3),
+                "{vn}"
+            );
+        }
+
+        // A stop at the stops' height: the ball at 64° on the circle, moving outwards along
+        // the track at 2 rad/s relative to the housing (towards the + stop), and at −66°
+        // beyond the − stop, moving away from the track (towards the − stop's outer face).
+        for (angle, rate, inside) in [(64.0f64, 2.0, true), (-66.0, 2.0, false)] {
+            let (mut m, mut s) = at_landing_in(1.0, ImpactModel::OverStep);
+            let (a, a_rate) = m.sys.end_point(&s);
+            let x = System::<f64, FreeBall, 3, 13>::local(&s.q, &s.v, &s.a);
+            let (psi, psi_rate) = tip::psi_and_rate(&x);
+            let rho = 0.99 * m.sys.params.ball.path_radius();
+            let th = psi + angle.to_radians();
+            let w = psi_rate + rate;
+            s.flight.centre = [a[0] + rho * th.sin(), a[1] - rho * th.cos()];
+            s.flight.velocity = [
+                a_rate[0] + rho * w * th.cos(),
+                a_rate[1] + rho * w * th.sin(),
+            ];
+            let before = kinetic(&mut m, &s);
+            let side = if inside {
+                Side::Positive
+            } else {
+                Side::Negative
+            };
+            let (_, speed) = m.sys.flight_relative_angle(&s);
+            let mut ws = Workspace::default();
+            m.sys
+                .stop_impulse(&mut s, side, inside, &mut ws)
+                .expect("stop");
+            let after = kinetic(&mut m, &s);
+            let (alpha, rebound) = m.sys.flight_relative_angle(&s);
+            println!("stop at {angle}°: {before} → {after}, rate {speed} → {rebound}, α {alpha}");
+            assert!(
+                (after - before).abs() < 1e-12 * before,
+                "{before} → {after}"
+            );
+            assert!(rebound * speed < 0.0, "{speed} → {rebound}");
+        }
+    }
+
+    /// Where a bounce's energy goes (docs/model.md, "Elastic bounces at the paper's step"): the
+    /// stiff housing (E × 10⁴) at rest, the ball meeting the track's bottom at 1.1 m/s (a drop
+    /// from 0.95ρ above A), e_n = 1. The housing's effective mass at A along the vertical is
+    /// `m_eff = 1/(e_yᵀ M⁻¹ e_y)` (M: the flight mode's mass matrix, beam and tip body) =
+    /// 0.126 kg, 87 % of its compliance in the first mode (429 Hz), 6.5 % at 4.1 kHz, the rest in
+    /// modes up to 4 MHz (the end node's axial and slope-stretch modes; printed). An
+    /// instantaneous impulse (the mass metric) is the collision of two free masses: the ball
+    /// rebounds at `(1 − μ)/(1 + μ)` of its speed, μ = m_b/m_eff = 0.111, and hands the housing
+    /// `4μ/(1 + μ)²` = 36 % of its kinetic energy (checked to 1e-9). The over-step metric
+    /// (h = 3 ms) spreads the impulse over the step, which the 429 Hz mode (ωh = 8) follows
+    /// quasi-statically: the housing takes 0.065 % (checked: below 0.1 %).
+    #[test]
+    fn a_bounce_on_a_stiff_housing_hands_it_a_third_of_the_energy_if_instantaneous() {
+        let v = 1.1;
+        let mut shares = [0.0; 2];
+        for (i, model) in [ImpactModel::Instantaneous, ImpactModel::OverStep]
+            .into_iter()
+            .enumerate()
+        {
+            let mut p = Params::<f64>::default();
+            p.beam.modulus *= 1e4;
+            p.ball.landing_restitution = 1.0;
+            p.ball.restitution = 1.0;
+            p.ball.impact_model = model;
+            let mut m = Model::<f64, FreeBall, 3, 13>::at_rest(p, 0.0).expect("start");
+            let mut s = m.state;
+            let (a, _) = m.sys.end_point(&s);
+            let rho = p.ball.path_radius();
+            s.contact = Contact::InFlight;
+            s.flight.centre = [a[0], a[1] - rho];
+            s.flight.velocity = [0.0, -v];
+            let before = kinetic(&mut m, &s);
+            let mut ws = Workspace::default();
+            let mut report = empty_report();
+            m.sys.land(&mut s, &mut ws, &mut report).expect("land");
+            let ball =
+                0.5 * p.ball.mass * (s.flight.velocity[0].powi(2) + s.flight.velocity[1].powi(2));
+            let after = kinetic(&mut m, &s);
+            assert!(
+                (after - before).abs() < 1e-12 * before,
+                "{before} → {after}"
+            );
+            shares[i] = (after - ball) / before;
+            if model == ImpactModel::Instantaneous {
+                let z = SVector::<f64, 13>::zeros();
+                let matrix = |q: &SVector<f64, 13>, c_q: f64, c_m: f64| {
+                    let ch = crate::tip::Chain { c_q, c_v: 0.0, c_m };
+                    let (_, j, _) =
+                        m.sys
+                            .assemble(q, &z, &z, p.gravity, &ch, Contact::InFlight, false);
+                    j
+                };
+                let mass = matrix(&s.q, 0.0, 1.0);
+                let mut e_y = SVector::<f64, 13>::zeros();
+                e_y[System::<f64, FreeBall, 3, 13>::END + 1] = 1.0;
+                let compliance = e_y.dot(&mass.lu().solve(&e_y).expect("M"));
+                let mu = p.ball.mass * compliance;
+                println!("m_eff = {:.4} kg, μ = {mu:.4}", 1.0 / compliance);
+                assert!((1.0 / compliance - 0.126).abs() < 0.001);
+                let rebound = (1.0 - mu) / (1.0 + mu) * v;
+                assert!(
+                    (s.flight.velocity[1] - rebound).abs() < 1e-9,
+                    "{:?}",
+                    s.flight.velocity
+                );
+                assert!((shares[i] - 4.0 * mu / (1.0 + mu).powi(2)).abs() < 1e-9);
+                // The compliance at A by mode (M = LLᵀ, modes of L⁻¹KL⁻ᵀ; the spin, free in
+                // flight, is left out).
+                let eq = m.sys.equilibrium;
+                let (mass, stiffness) = (matrix(&eq, 0.0, 1.0), matrix(&eq, 1.0, 0.0));
+                let sub = |x: &nalgebra::SMatrix<f64, 13, 13>| {
+                    let y = x.fixed_view::<12, 12>(0, 0).into_owned();
+                    (y + y.transpose()) * 0.5
+                };
+                let l = sub(&mass).cholesky().expect("M > 0").l();
+                let x = l.solve_lower_triangular(&sub(&stiffness)).expect("L");
+                let k = l.solve_lower_triangular(&x.transpose()).expect("L");
+                let eig = ((k + k.transpose()) * 0.5).symmetric_eigen();
+                let mut f = nalgebra::SVector::<f64, 12>::zeros();
+                f[System::<f64, FreeBall, 3, 13>::END + 1] = 1.0;
+                let zf = l.solve_lower_triangular(&f).expect("L");
+                let mut modes: std::vec::Vec<(f64, f64)> = (0..12)
+                    .map(|j| {
+                        let hz = eig.eigenvalues[j].max(0.0).sqrt() / core::f64::consts::TAU;
+                        (
+                            hz,
+                            eig.eigenvectors.column(j).dot(&zf).powi(2) / zf.norm_squared(),
+                        )
+                    })
+                    .collect();
+                modes.sort_by(|a, b| a.0.total_cmp(&b.0));
+                for (hz, share) in &modes {
+                    println!("{hz:12.1} Hz: {share:.4} of the compliance at A");
+                }
+                let (first, second) = (modes[0], modes[1]);
+                assert!((first.0 - 429.0).abs() < 1.0 && (first.1 - 0.872).abs() < 0.001);
+                assert!((second.0 - 4103.0).abs() < 5.0 && (second.1 - 0.065).abs() < 0.001);
+            }
+        }
+        println!(
+            "housing's share: instantaneous {:.4}, over-step {:.2e}",
+            shares[0], shares[1]
+        );
+        assert!(shares[1] < 1e-3, "{}", shares[1]);
     }
 
     #[test]
