@@ -1,7 +1,7 @@
 //! Newton iterations on the Newmark (or static, or acceleration) equations, with a factored
 //! Newton matrix that is reused while it still contracts, and damping beyond a trust radius.
 //!
-//! **Reuse rule** (the same in the full solver, `host-sim/src/full`). An iteration either
+//! **Reuse rule** (the same in the full solver, `absorber-full`). An iteration either
 //! *refreshes* — assembles the residual and the exact Newton matrix at the current iterate and
 //! factors it — or *reuses* the latest factors with a residual alone (no dual numbers, no axial
 //! tangent: about a third of the work). A reused matrix must contract the correction by half:
@@ -19,6 +19,8 @@
 //!   costliest landings spent three reused iterations, the third not taken, before the refresh
 //!   they then needed anyway (62 work units; refreshing at once, no landing takes more than 44,
 //!   and the paper run's mean falls from 26.7 to 25.8 units a step).
+//!   Kept factors get at most [`KEPT_ITERATIONS`] iterations in a solve: one that is not
+//!   converged by then refreshes at the next (below).
 //! - `Full`: every iteration refreshes (the paper's Newton–Raphson; the reference).
 //!
 //! **Work cap.** Every expensive operation of a step is counted in work units ([`work`]):
@@ -65,6 +67,18 @@ pub const SETTLE: f64 = 1e-4;
 /// A reused matrix whose correction contracted by less than this factor is refreshed at the
 /// next iteration (the correction itself is taken when it contracts by half).
 pub const SLOW: f64 = 0.25;
+
+/// Most iterations a Newton solve gives the factors kept from an earlier step (modified
+/// Newton): a solve that has not converged after this many refreshes at the next iteration.
+/// Why: near the rounding floor of `f32` (the settled test asks for `8ε` there) a kept matrix's
+/// corrections stop contracting steadily (θ = 0.13, 0.20, 0.23, 0.19, 0.31 in the paper run's
+/// hardest step), and each further reused iteration costs [`work::RESIDUAL`] +
+/// [`work::SOLVE`] = 6 units against a refresh's 17, which converges at once from there. Five
+/// reused iterations (30 units, the correction contracted by about 0.2⁵ ≈ 3e-4) bound a
+/// rolling step at 47 units: the paper run's hardest step took six and a refresh, 53
+/// (`docs/embedded.md`, "Firmware defaults"). Factors built in the same step (every
+/// `PerStep` reuse) are not limited.
+pub const KEPT_ITERATIONS: u32 = 5;
 
 /// Work units of the operations a step is made of ([`crate::Integrator::max_work`] caps their
 /// sum per step). The weights follow the operations' measured costs on a Cortex-M4F, each with
@@ -550,8 +564,12 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                     continue;
                 }
                 // Taken; but a matrix that contracts slowly (θ > SLOW) would cost more iterations
-                // than a fresh one, which converges quadratically: refresh at the next iteration.
-                refresh = reuse && it > 1 && norm > previous * self.slow;
+                // than a fresh one, which converges quadratically: refresh at the next iteration;
+                // so do factors kept from an earlier step after `KEPT_ITERATIONS` iterations
+                // (every iteration of this solve so far reused them: none was built).
+                refresh = reuse
+                    && it > 1
+                    && (norm > previous * self.slow || (!ws.built && it >= KEPT_ITERATIONS));
                 let lambda = if norm > self.max_step {
                     self.damping(p, &x, &dx, norm, ws)
                 } else {

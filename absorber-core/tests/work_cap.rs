@@ -223,3 +223,38 @@ fn the_pivoting_fallback_in_the_paper_scene() {
         assert_eq!(steps, expected, "{events:?}");
     }
 }
+
+/// Modified Newton gives the factors kept from earlier steps at most
+/// `newton::KEPT_ITERATIONS` iterations in a solve, then refreshes: on the paper's input (f32,
+/// events at the step end, no cap) no step takes more than five such iterations and a refresh,
+/// 47 units, so the firmware's cap of 49 (that plus the events' reserve) never acts on it: the
+/// run with that cap is the uncapped run bit for bit. Before the rule the hardest step took six
+/// reused iterations and a refresh, 53 units (its corrections contracted by 0.13–0.31 near the
+/// rounding floor of `f32`, where the settled test asks for 8ε).
+#[test]
+fn modified_newton_gives_kept_factors_at_most_five_iterations() {
+    use absorber_core::newton::KEPT_ITERATIONS;
+    use absorber_core::NewtonKind;
+    let bound = KEPT_ITERATIONS * (work::RESIDUAL + work::SOLVE) + work::REFRESH + work::SOLVE;
+    assert_eq!(bound, 47);
+    let model = |cap: u32| {
+        let mut p = deadline();
+        p.integrator.newton = NewtonKind::Modified;
+        p.integrator.max_work = cap;
+        FreeBallModel::<f32, 3, 13>::at_rest(p, 0.0).expect("start")
+    };
+    let mut free = model(work::UNLIMITED);
+    let mut capped = model(bound + work::RESERVE);
+    let omega = 2.0 * core::f32::consts::PI * 4.13;
+    let input = |k: u32| -0.5e-3 * omega * omega * libm::sinf(omega * k as f32 * 0.003);
+    let mut most = 0;
+    for k in 1..=6667u32 {
+        let r = free.step(input(k)).expect("uncapped step");
+        let c = capped.step(input(k)).expect("capped step");
+        assert_eq!(r.outcome, Outcome::Converged, "step {k}");
+        most = most.max(u32::from(r.work));
+        assert_eq!(c.work, r.work, "step {k}: the cap acted");
+        assert_eq!(capped.state(), free.state(), "step {k}");
+    }
+    assert!(most <= bound, "hardest paper step {most} units");
+}

@@ -285,8 +285,9 @@ pub struct Modified;
 
 impl Config for Modified {
     const NAME: &'static str = "modified Newton";
-    /// Its hardest paper step takes 53 units (more, cheaper iterations).
-    const MAX_WORK: u32 = 55;
+    /// Its hardest paper step takes 47 units (five iterations with the kept factors and a
+    /// refresh: `absorber_core::newton::KEPT_ITERATIONS`).
+    const MAX_WORK: u32 = 49;
     fn apply(p: &mut Params<f32>) {
         p.integrator.newton = absorber_core::NewtonKind::Modified;
     }
