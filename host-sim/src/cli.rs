@@ -115,7 +115,35 @@ pub enum Command {
     /// Packages the reduced model of a scene as an FMI 3.0 or 2.0 co-simulation FMU (inputs:
     /// base acceleration, tip load; outputs: tip deflection and acceleration, root stress,
     /// ball angle, contact, normal force, Miner damage; fixed step h; docs/fmu.md).
-    Fmu(crate::commands::FmuArgs),
+    Fmu(FmuArgs),
+}
+
+/// FMI version of the FMU (command-line spelling).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FmiVersion {
+    /// FMI 3.0 (Simulink, FMPy, OpenModelica ≥ 1.21, Dymola 2023x).
+    #[value(name = "3")]
+    V3,
+    /// FMI 2.0 (most tools).
+    #[value(name = "2")]
+    V2,
+}
+
+/// `fmu`.
+#[derive(Args, Debug)]
+pub struct FmuArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// FMI version of the FMU.
+    #[arg(long, value_enum)]
+    pub fmi_version: FmiVersion,
+    /// The FMU file to write (e.g. absorber.fmu).
+    #[arg(long, short)]
+    pub out: PathBuf,
+    /// The FMU's shared library to package (default: `libabsorber_fmu.so` beside this
+    /// executable or in its `deps/`, where cargo builds it with host-sim).
+    #[arg(long)]
+    pub library: Option<PathBuf>,
 }
 
 /// `estimate`.
@@ -584,11 +612,6 @@ pub fn with_negative_numbers(
         }
     }
     out
-}
-
-/// Runs the parsed command line.
-pub fn main(cli: Cli) -> Result<()> {
-    crate::commands::dispatch(cli)
 }
 
 /// A command-line tool of this workspace as a process (`host-sim`, and the studies' developer

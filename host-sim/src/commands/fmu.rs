@@ -9,42 +9,13 @@
 //! takes it from beside its own executable, or from `--library`. A library whose build marker
 //! differs from the one compiled into this `host-sim` (built from other sources) is refused.
 
-use crate::cli::SceneArgs;
+use crate::cli::{FmiVersion, FmuArgs};
 use crate::scene::{Kind, Precision, Scene, Solver};
 use absorber_fmu::config::{Config, Kind as FmuKind};
 use absorber_fmu::xml::{self, Version};
 use anyhow::{anyhow, bail, Context, Result};
-use clap::Args;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-/// FMI version of the FMU (command-line spelling).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum FmiVersion {
-    /// FMI 3.0 (Simulink, FMPy, OpenModelica ≥ 1.21, Dymola 2023x).
-    #[value(name = "3")]
-    V3,
-    /// FMI 2.0 (most tools).
-    #[value(name = "2")]
-    V2,
-}
-
-/// `fmu`.
-#[derive(Args, Debug)]
-pub struct FmuArgs {
-    #[command(flatten)]
-    pub scene: SceneArgs,
-    /// FMI version of the FMU.
-    #[arg(long, value_enum)]
-    pub fmi_version: FmiVersion,
-    /// The FMU file to write (e.g. absorber.fmu).
-    #[arg(long, short)]
-    pub out: PathBuf,
-    /// The FMU's shared library to package (default: `libabsorber_fmu.so` beside this
-    /// executable or in its `deps/`, where cargo builds it with host-sim).
-    #[arg(long)]
-    pub library: Option<PathBuf>,
-}
 
 /// The FMU configuration of a scene (errors name the scene key).
 pub fn config_of(s: &Scene) -> Result<Config> {

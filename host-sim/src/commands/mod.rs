@@ -9,7 +9,6 @@ mod info;
 mod run;
 mod sweep;
 
-pub use fmu::FmuArgs;
 pub use info::{lowest_frequencies, static_summary};
 pub use run::{run_ensemble_in_memory, run_in_memory, step_damping_line, summary_in_memory};
 pub use sweep::{sweep_ensemble_in_memory, sweep_in_memory};
