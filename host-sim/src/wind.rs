@@ -496,6 +496,4 @@ fn interpolate(rows: &[[f64; 3]], t: f64) -> (f64, f64) {
 }
 
 #[cfg(test)]
-mod scene_tests;
-#[cfg(test)]
 mod tests;

@@ -32,6 +32,8 @@ mod arm;
 mod checks;
 mod sections;
 mod sensors;
+#[cfg(test)]
+mod tests;
 
 pub use arm::*;
 pub use checks::*;

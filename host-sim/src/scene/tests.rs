@@ -1,4 +1,4 @@
-use crate::scene::Scene;
+use super::Scene;
 
 const ARM: &str = r#"
 kind = "beam"
