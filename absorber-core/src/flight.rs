@@ -692,7 +692,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     #[inline]
     pub(crate) fn perfectly_elastic(&self) -> bool {
         let b = &self.params.ball;
-        b.restitution >= T::one()
+        S::ELASTIC_RULES
+            && b.restitution >= T::one()
             && (b.landing_restitution >= T::one() || !self.flies())
             && !self.events_at_step_end()
     }

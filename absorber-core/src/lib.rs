@@ -76,8 +76,8 @@ pub use params::{
 };
 pub use scalar::Real;
 pub use scene::{
-    Arm, BallKind, BeamOnly, FreeBall, FreeBallNoFlight, FreeBallNoStops, Loaded, LockedBall,
-    Scene, TipMass,
+    Arm, AtStepEnd, BallKind, BeamOnly, FreeBall, FreeBallNoFlight, FreeBallNoStops, Lean, Loaded,
+    LockedBall, Scene, TipMass,
 };
 
 /// Beam alone, `N` elements, `D = 4N` unknowns.

@@ -315,6 +315,30 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         #[allow(clippy::let_unit_value)]
         let () = Self::CHECK;
         params.validate(S::HAS_TIP, !matches!(S::BALL, BallKind::None))?;
+        if !S::ELASTIC_RULES
+            && params.ball.restitution >= T::one()
+            && params.integrator.events == crate::params::EventLocation::Crossing
+        {
+            return Err(Error::InvalidParameter {
+                field: "ball.restitution",
+                reason: "the scene leaves the perfectly elastic rules out (Scene::ELASTIC_RULES): below 1, or events at the step end",
+            });
+        }
+        if !S::GENERALIZED_ALPHA && !params.integrator.is_newmark() {
+            return Err(Error::InvalidParameter {
+                field: "integrator.alpha_m",
+                reason:
+                    "the scene is Newmark's method only (Scene::GENERALIZED_ALPHA): α_m = α_f = 0",
+            });
+        }
+        if !S::EVENTS_AT_CROSSING
+            && params.integrator.events == crate::params::EventLocation::Crossing
+        {
+            return Err(Error::InvalidParameter {
+                field: "integrator.events",
+                reason: "the scene puts every event at the step end (Scene::EVENTS_AT_CROSSING)",
+            });
+        }
         if !<S::Data<T, N> as crate::loads::SceneData<T, N>>::SECTIONS
             && params.calibration.bending_gradient != T::zero()
         {

@@ -73,7 +73,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The Newton chain of a step of length `h`: `(c_q, c_v, c_m) = (κβh², κγh, 1)` (`κ = 1`
     /// for Newmark).
     pub(crate) fn newmark_chain(&self, h: T) -> Chain<T> {
-        AlphaRecursion::chain(&self.params.integrator, self.alpha.as_ref(), h)
+        AlphaRecursion::chain(&self.params.integrator, self.alpha(), h)
+    }
+
+    /// The generalized-α recursion's constants (`None`: Newmark's method; always for a scene
+    /// without [`Scene::GENERALIZED_ALPHA`], whose code then has no generalized-α branch).
+    #[inline(always)]
+    pub(crate) fn alpha(&self) -> Option<&AlphaRecursion<T>> {
+        if S::GENERALIZED_ALPHA {
+            self.alpha.as_ref()
+        } else {
+            None
+        }
     }
 
     /// The beam's accelerations at an event a fraction `tau` into a step from `start` whose
@@ -157,7 +168,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     ) -> Result<Solved<T, D>, Error> {
         let i = &self.params.integrator;
         let half = lit::<T>(0.5);
-        let pseudo = if self.alpha.is_some() {
+        let pseudo = if self.alpha().is_some() {
             &s.pseudo_accel
         } else {
             &s.a
@@ -171,7 +182,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         // Generalized-α: the known part b of a_{n+1} (in out.pseudo_accel) enters the
         // predictor like a Newmark acceleration (module doc).
         out.pseudo_accel.fill(T::zero());
-        if let Some(g) = &self.alpha {
+        if let Some(g) = self.alpha() {
             let known = &mut out.pseudo_accel;
             known.axpy(g.from_accel, &s.a, T::zero());
             known.axpy(g.from_pseudo, &s.pseudo_accel, T::one());
@@ -200,7 +211,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         out.flight = s.flight;
         out.q.axpy(ch.c_q, a, T::one());
         out.v.axpy(ch.c_v, a, T::one());
-        match &self.alpha {
+        match self.alpha() {
             Some(g) => out.pseudo_accel.axpy(g.ratio, a, T::one()),
             None => out.pseudo_accel = *a,
         }

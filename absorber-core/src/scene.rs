@@ -50,6 +50,23 @@ pub trait Scene: Copy + Default + 'static {
     /// The free ball may leave the track ([`crate::flight`]; at run time also
     /// `ball.flight`). A scene without it compiles the flight code out.
     const FLIGHT: bool = false;
+    /// The perfectly elastic ball's rules are compiled in (`ball.restitution` 1 with events at
+    /// their crossings: energy-exact impulses, every flight event split at its crossing;
+    /// `docs/model.md`, "Elastic bounces at the paper's step"). A scene without them
+    /// ([`Lean`]) links none of that code and rejects, at construction, the parameters that
+    /// would take it: restitution 1 with [`EventLocation::Crossing`](crate::EventLocation).
+    /// Every other run is the same, bit for bit.
+    const ELASTIC_RULES: bool = true;
+    /// Events at their crossings are compiled in ([`EventLocation::Crossing`](crate::EventLocation):
+    /// the step redone to the crossing, the event, the rest). A scene without them
+    /// ([`AtStepEnd`]) puts every event at the end of its step and rejects, at construction,
+    /// parameters with events at their crossings. Every other run is the same, bit for bit.
+    const EVENTS_AT_CROSSING: bool = true;
+    /// The generalized-α scheme is compiled in (`integrator.alpha_m`, `alpha_f` not zero:
+    /// [`crate::Integrator::generalized_alpha`]). A scene without it ([`Lean`]) is Newmark's
+    /// method only and rejects other parameters at construction; its Newmark runs are the same,
+    /// bit for bit.
+    const GENERALIZED_ALPHA: bool = true;
     /// Unknowns the scene adds after the 4N beam coordinates.
     const EXTRA_DOFS: usize = if matches!(Self::BALL, BallKind::Free) {
         1
@@ -142,6 +159,9 @@ impl<S: Scene> Scene for Loaded<S> {
     const BALL: BallKind = S::BALL;
     const STOPS: bool = S::STOPS;
     const FLIGHT: bool = S::FLIGHT;
+    const ELASTIC_RULES: bool = S::ELASTIC_RULES;
+    const EVENTS_AT_CROSSING: bool = S::EVENTS_AT_CROSSING;
+    const GENERALIZED_ALPHA: bool = S::GENERALIZED_ALPHA;
     const NAME: &'static str = S::NAME;
     type Data<T: Real, const N: usize> = Loads<T, N>;
 }
@@ -155,6 +175,106 @@ impl<S: Scene> Scene for Arm<S> {
     const BALL: BallKind = S::BALL;
     const STOPS: bool = S::STOPS;
     const FLIGHT: bool = S::FLIGHT;
+    const ELASTIC_RULES: bool = S::ELASTIC_RULES;
+    const EVENTS_AT_CROSSING: bool = S::EVENTS_AT_CROSSING;
+    const GENERALIZED_ALPHA: bool = S::GENERALIZED_ALPHA;
     const NAME: &'static str = S::NAME;
     type Data<T: Real, const N: usize> = ArmData<T, N>;
+}
+
+/// Scene `S` with only what a firmware's configuration takes compiled in: the same bodies,
+/// unknowns and arithmetic, without the code of run-time options its parameters never choose
+/// (those parameters are rejected at construction instead): the perfectly elastic ball's rules
+/// ([`Scene::ELASTIC_RULES`]) and the generalized-α scheme ([`Scene::GENERALIZED_ALPHA`]). Every run it accepts is bit for bit the run of `S`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Lean<S>(PhantomData<S>);
+impl<S: Scene> Scene for Lean<S> {
+    const HAS_TIP: bool = S::HAS_TIP;
+    const BALL: BallKind = S::BALL;
+    const STOPS: bool = S::STOPS;
+    const FLIGHT: bool = S::FLIGHT;
+    const ELASTIC_RULES: bool = false;
+    const EVENTS_AT_CROSSING: bool = S::EVENTS_AT_CROSSING;
+    const GENERALIZED_ALPHA: bool = false;
+    const NAME: &'static str = S::NAME;
+    type Data<T: Real, const N: usize> = S::Data<T, N>;
+}
+
+/// [`Lean`] with every event at the end of its step ([`Scene::EVENTS_AT_CROSSING`] off): the
+/// code of events at their crossings is left out too (the firmware's scenes, which run with
+/// [`EventLocation::StepEnd`](crate::EventLocation); the pole monitor's own scene keeps it for
+/// the simulated pole its sensor reads). Every run it accepts is bit for bit the run of `S`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AtStepEnd<S>(PhantomData<S>);
+impl<S: Scene> Scene for AtStepEnd<S> {
+    const HAS_TIP: bool = S::HAS_TIP;
+    const BALL: BallKind = S::BALL;
+    const STOPS: bool = S::STOPS;
+    const FLIGHT: bool = S::FLIGHT;
+    const ELASTIC_RULES: bool = false;
+    const EVENTS_AT_CROSSING: bool = false;
+    const GENERALIZED_ALPHA: bool = false;
+    const NAME: &'static str = S::NAME;
+    type Data<T: Real, const N: usize> = S::Data<T, N>;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{EventLocation, Model, Params};
+
+    /// The paper's free ball at ten times its amplitude, perfectly elastic (`e = e_n = 1`),
+    /// events at the step end: `AtStepEnd<FreeBall>` (and `Lean<FreeBall>`) run it exactly as
+    /// `FreeBall` does, every state bit for bit, with impacts and flights in the run.
+    #[test]
+    fn lean_scenes_run_the_same_steps_bit_for_bit() {
+        let mut p = Params::<f32>::default();
+        p.integrator.events = EventLocation::StepEnd;
+        p.ball.restitution = 1.0;
+        p.ball.landing_restitution = 1.0;
+        let mut full = Model::<f32, FreeBall, 3, 13>::at_rest(p, 0.0).unwrap();
+        let mut end = Model::<f32, AtStepEnd<FreeBall>, 3, 13>::at_rest(p, 0.0).unwrap();
+        let mut lean = Model::<f32, Lean<FreeBall>, 3, 13>::at_rest(p, 0.0).unwrap();
+        let omega = 2.0 * core::f32::consts::PI * 4.13;
+        let mut events = 0u32;
+        for k in 1..=1500u32 {
+            let t = k as f32 * p.integrator.step;
+            let ya = -5.0e-3 * omega * omega * libm::sinf(omega * t);
+            let r = full.step(ya);
+            assert_eq!(r, end.step(ya));
+            assert_eq!(r, lean.step(ya));
+            if let Ok(r) = r {
+                events += u32::from(r.events.impacts) + u32::from(r.impact.is_some());
+            }
+            for m in [end.state(), lean.state()] {
+                let s = full.state();
+                for (a, b) in
+                    s.q.iter()
+                        .chain(s.v.iter())
+                        .zip(m.q.iter().chain(m.v.iter()))
+                {
+                    assert_eq!(a.to_bits(), b.to_bits(), "step {k}");
+                }
+                assert_eq!(s.contact, m.contact);
+            }
+        }
+        assert!(events > 0, "the run has no impact");
+    }
+
+    /// A scene without a run-time option rejects the parameters that would take it.
+    #[test]
+    fn lean_scenes_reject_what_they_leave_out() {
+        let p = Params::<f32>::default();
+        assert_eq!(p.integrator.events, EventLocation::Crossing);
+        assert!(Model::<f32, AtStepEnd<FreeBall>, 3, 13>::new(p).is_err());
+        assert!(Model::<f32, Lean<FreeBall>, 3, 13>::new(p).is_ok());
+        let mut elastic = p;
+        elastic.ball.restitution = 1.0;
+        assert!(Model::<f32, FreeBall, 3, 13>::new(elastic).is_ok());
+        assert!(Model::<f32, Lean<FreeBall>, 3, 13>::new(elastic).is_err());
+        let mut alpha = p;
+        alpha.integrator = alpha.integrator.generalized_alpha(0.8);
+        assert!(Model::<f32, FreeBall, 3, 13>::new(alpha).is_ok());
+        assert!(Model::<f32, Lean<FreeBall>, 3, 13>::new(alpha).is_err());
+    }
 }

@@ -86,7 +86,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// Events are put at the end of their step ([`EventLocation::StepEnd`]).
     #[inline]
     pub(crate) fn events_at_step_end(&self) -> bool {
-        self.params.integrator.events == EventLocation::StepEnd
+        !S::EVENTS_AT_CROSSING || self.params.integrator.events == EventLocation::StepEnd
     }
 
     /// The impact of a step whose trial end `s` crossed a stop, put at the step's end

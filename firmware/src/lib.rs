@@ -65,6 +65,13 @@ pub fn firmware_params(setup: &Setup) -> Params<f32> {
     p
 }
 
+/// The free ball as the firmware runs it ([`firmware_params`]: every event at the end of its
+/// step): the code of events at their crossings and of the perfectly elastic ball's rules is
+/// left out at compile time ([`absorber_core::AtStepEnd`]); its runs are those of
+/// `FreeBallModel<f32, N, D>`, bit for bit.
+pub type FwFreeBall<const N: usize, const D: usize> =
+    Model<f32, absorber_core::AtStepEnd<absorber_core::FreeBall>, N, D>;
+
 /// What the driver needs from a scene.
 pub trait Sim: Sized {
     /// Scene name as printed.

@@ -28,7 +28,7 @@ use absorber_core::estimator::{
 };
 use absorber_core::monitor::stress::RootSection;
 use absorber_core::newton::work;
-use absorber_core::{Error, EventLocation, FreeBall, Loaded, Model, Params, StepReport};
+use absorber_core::{Error, EventLocation, FreeBall, Lean, Loaded, Model, Params, StepReport};
 use core::fmt::Write;
 use core::mem::MaybeUninit;
 
@@ -39,10 +39,13 @@ const D: usize = 4 * N + 1;
 const MODES: usize = 3;
 const X: usize = 2 * MODES + AUGMENTED;
 
-/// The scene of the monitor's model (the filter needs its tip load).
-type Pole = Model<f32, Loaded<FreeBall>, N, D>;
+/// The scene of the monitor's model (the filter needs its tip load): the free ball without
+/// the code of the run-time options this bin never takes ([`Lean`]: no perfectly elastic
+/// rules; its runs are those of `Loaded<FreeBall>`, bit for bit).
+type Scene = Loaded<Lean<FreeBall>>;
+type Pole = Model<f32, Scene, N, D>;
 /// The filter.
-type Filter = Ekf<f32, Loaded<FreeBall>, N, D, MODES, X>;
+type Filter = Ekf<f32, Scene, N, D, MODES, X>;
 
 /// Tip accelerometer: white noise sd \[m/s²\] (25 µg/√Hz over 83 Hz), bias \[m/s²\] (20 mg),
 /// range \[m/s²\] (2 g).

@@ -379,7 +379,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         let i = &p.integrator;
         let h = i.step;
         let ch = model.sys.newmark_chain(h);
-        let (fa, fp, kappa, blocks) = match &model.sys.alpha {
+        let (fa, fp, kappa, blocks) = match model.sys.alpha() {
             Some(g) => (g.from_accel, g.from_pseudo, g.ratio, 3),
             None => (T::zero(), T::zero(), T::one(), 2),
         };

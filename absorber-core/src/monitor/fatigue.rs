@@ -119,9 +119,25 @@ impl DetailCategory {
         }
     }
 
+    /// The stress range at [`REFERENCE_CYCLES`] \[ksi\]: `∛(A / 2·10⁶)`, the value of
+    /// `libm::cbrt` (correctly rounded) as a constant: a firmware building the curve then links
+    /// no `f64` cube root (about 2 KB; the test `reference_ranges_are_the_cube_roots` checks
+    /// every category bit for bit).
+    pub fn reference_range_ksi(self) -> f64 {
+        f64::from_bits(match self {
+            Self::A => 0x4037_353b_d439_3a75,
+            Self::B => 0x4032_2bd4_26d7_058f,
+            Self::BPrime => 0x402d_011d_afce_3df7,
+            Self::C | Self::CPrime => 0x402a_0307_38a1_ae3b,
+            Self::D => 0x4024_a546_3163_ec8d,
+            Self::E => 0x4020_62ec_c69a_f055,
+            Self::EPrime => 0x4017_3210_3834_040e,
+        })
+    }
+
     /// The S–N curve in Pa with the given threshold rule.
     pub fn curve<T: Real>(self, rule: ThresholdRule) -> SnCurve<T> {
-        let s2_ksi = libm::cbrt(self.constant_ksi3() / REFERENCE_CYCLES);
+        let s2_ksi = self.reference_range_ksi();
         SnCurve {
             slope: lit(3.0),
             reference_range: lit(s2_ksi * KSI),
@@ -394,5 +410,25 @@ impl<T: Real, const CAP: usize> StressDamage<T, CAP> {
     /// The rainflow counter (its residue: the cycles not closed yet).
     pub fn rainflow(&self) -> &Rainflow<T, CAP> {
         &self.rainflow
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The constants of [`DetailCategory::reference_range_ksi`] are the cube roots the curve
+    /// took before, bit for bit.
+    #[test]
+    fn reference_ranges_are_the_cube_roots() {
+        for c in DetailCategory::ALL {
+            let cbrt = libm::cbrt(c.constant_ksi3() / REFERENCE_CYCLES);
+            assert_eq!(
+                c.reference_range_ksi().to_bits(),
+                cbrt.to_bits(),
+                "{}",
+                c.name()
+            );
+        }
     }
 }

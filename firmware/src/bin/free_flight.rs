@@ -4,6 +4,6 @@
 //! On `thumbv7em-none-eabihf` this is the firmware; on the host it prints the reference.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
-type M = absorber_firmware::InFlight<absorber_core::FreeBallModel<f32, 3, 13>>;
+type M = absorber_firmware::InFlight<absorber_firmware::FwFreeBall<3, 13>>;
 
 absorber_firmware::firmware_main!(M);

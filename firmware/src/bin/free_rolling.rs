@@ -10,7 +10,7 @@
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 type M = absorber_firmware::Configured<
-    absorber_core::Model<f32, absorber_core::FreeBallNoFlight, 3, 13>,
+    absorber_core::Model<f32, absorber_core::AtStepEnd<absorber_core::FreeBallNoFlight>, 3, 13>,
     absorber_firmware::Cap<47>,
 >;
 

@@ -2,6 +2,6 @@
 //! Never run: `scripts/embedded-report.py` checks that its call-graph panic check finds it.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
-type M = absorber_firmware::Planted<absorber_core::FreeBallModel<f32, 3, 13>>;
+type M = absorber_firmware::Planted<absorber_firmware::FwFreeBall<3, 13>>;
 
 absorber_firmware::firmware_main!(M);
