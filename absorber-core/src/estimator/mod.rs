@@ -16,6 +16,7 @@ pub mod constant;
 pub mod ekf;
 pub mod health;
 pub mod sensors;
+mod ud;
 
 pub use basis::ModalBasis;
 pub use constant::{Estimate, Estimator, Gain};
