@@ -45,14 +45,14 @@ for s in "${stages[@]}"; do
   start=$(date +%s)
   echo "== $s"
   case $s in
-    gain) "$bin" estimate --scene scenes/mast-arm.toml --emit-firmware firmware/src/estimator_gain.rs ;;
+    gain) "$studies" firmware-gain ;;
     stability) "$studies" stability ;;
     validation) "$studies" validation ;;
     embedded) scripts/embedded-report.sh ;;
     cost) scripts/accuracy-cost.sh ;;
     accuracy) "$studies" accuracy ;;
     monitoring)
-      "$bin" estimate --table docs/monitoring.md
+      "$studies" monitoring
       "$bin" estimate --scene scenes/mast-arm.toml --out "$tmp/estimate"
       cp "$tmp/estimate/estimate_stress.png" "$tmp/estimate/estimate_histogram.png" \
         "$tmp/estimate/estimate.json" docs/img/

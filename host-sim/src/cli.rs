@@ -109,8 +109,7 @@ pub enum Command {
     /// truth: each quality figure (NIS, coverage of ±2 sd, innovation ratio, stress error,
     /// damage ratio) beside its expected range with ok / poor / failed, the grade the worst of
     /// them; `--json` for the same as JSON (`quality`, `grade`); `--out` for CSV, JSON and
-    /// plots (`estimate_*` or, with `--lab`, `lab*` files); `--table` for the regimes × sensor
-    /// sets × estimators table of docs/monitoring.md.
+    /// plots (`estimate_*` or, with `--lab`, `lab*` files).
     Estimate(EstimateArgs),
     /// Packages the reduced model of a scene as an FMI 3.0 or 2.0 co-simulation FMU (inputs:
     /// base acceleration, tip load; outputs: tip deflection and acceleration, root stress,
@@ -167,15 +166,6 @@ pub struct EstimateArgs {
     /// Directory for the CSV, plots and JSON.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Write the firmware's estimators as constants to this Rust file and stop
-    /// (firmware/src/estimator_consts.rs: the `--scene` arm's and the paper's lab arm's).
-    #[arg(long)]
-    pub emit_firmware: Option<PathBuf>,
-    /// Run every regime of docs/monitoring.md's table (lab at 3.70, 4.05, 4.10, 4.13 Hz; the
-    /// mast arm's scenes in scenes/) and write the table (markdown) to this file and its JSON
-    /// beside it.
-    #[arg(long)]
-    pub table: Option<PathBuf>,
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,

@@ -42,6 +42,37 @@ pub enum Command {
     /// Writes docs/validation.md: every quantitative claim of the paper beside this model's
     /// numbers (3 elements and a converged mesh), with verdicts, reasons and figures.
     Validation(ValidationArgs),
+    /// Writes the regimes × sensor sets × estimators table of docs/monitoring.md (lab at
+    /// 3.70, 4.05, 4.10, 4.13 Hz; the mast arm's scenes of scenes/: first-mode wind, von Kármán
+    /// wind, second-mode lock-in with a ±8 g and the shipped ±2 g accelerometer) between its
+    /// markers, and its JSON beside it (docs/monitoring.json).
+    Monitoring(MonitoringArgs),
+    /// Writes the firmware's constant-gain estimator of the mast arm as Rust constants
+    /// (firmware/src/estimator_gain.rs: calibrated f32 parameters, the arm and the gain as bit
+    /// patterns, so the firmware builds the twin's estimator bit for bit).
+    FirmwareGain(FirmwareGainArgs),
+}
+
+/// `monitoring` options.
+#[derive(Args, Debug, Clone)]
+pub struct MonitoringArgs {
+    /// Output document (its table between the `absorber-studies monitoring` markers is replaced).
+    #[arg(long, default_value = "docs/monitoring.md")]
+    pub out: std::path::PathBuf,
+    /// Duration of every regime [s] (default: the lab's 60 s and each scene's own).
+    #[arg(long, allow_negative_numbers = true)]
+    pub duration: Option<f64>,
+}
+
+/// `firmware-gain` options.
+#[derive(Args, Debug, Clone)]
+pub struct FirmwareGainArgs {
+    /// The arm's scene.
+    #[arg(long, default_value = "scenes/mast-arm.toml")]
+    pub scene: std::path::PathBuf,
+    /// The Rust file to write.
+    #[arg(long, default_value = "firmware/src/estimator_gain.rs")]
+    pub out: std::path::PathBuf,
 }
 
 /// `validation` options.
@@ -65,6 +96,8 @@ pub fn main(cli: Cli) -> Result<()> {
         Command::Chaos(a) => crate::chaos::run(&a),
         Command::Accuracy(a) => accuracy(&a),
         Command::Validation(a) => validation(&a),
+        Command::Monitoring(a) => monitoring(&a),
+        Command::FirmwareGain(a) => firmware_gain(&a),
     }
 }
 
@@ -94,6 +127,26 @@ fn accuracy(a: &AccuracyArgs) -> Result<()> {
         bail!("invalid value for `--repeats`: 0 (must be at least 1)");
     }
     crate::accuracy::run(a)
+}
+
+fn monitoring(a: &MonitoringArgs) -> Result<()> {
+    if let Some(d) = a.duration {
+        // The table's regimes run at 3 ms (lab) and 10 ms (arm); each holds every step in
+        // memory.
+        let (most, least) = (host_sim::scene::MAX_STEPS as f64 * 0.003, 0.01 * 10.0);
+        if !(d.is_finite() && (least..=most).contains(&d)) {
+            bail!("invalid value for `--duration`: {d} s (must lie in {least} ..= {most} s)");
+        }
+    }
+    crate::monitoring::write(&a.out, a.duration)
+}
+
+fn firmware_gain(a: &FirmwareGainArgs) -> Result<()> {
+    let scene = host_sim::scene::Scene::load(&a.scene.to_string_lossy())?;
+    let text = crate::firmware_gain::constants(&scene)?;
+    host_sim::output::atomic_write(&a.out, text.as_bytes())?;
+    eprintln!("firmware-gain: wrote {}", a.out.display());
+    Ok(())
 }
 
 fn validation(a: &ValidationArgs) -> Result<()> {

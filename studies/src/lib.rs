@@ -7,5 +7,7 @@
 pub mod accuracy;
 pub mod chaos;
 pub mod cli;
+pub mod firmware_gain;
+pub mod monitoring;
 pub mod stability;
 pub mod validation;

@@ -51,17 +51,6 @@ fn check_tip_force(force: f64, scene: &Scene) -> Result<f64> {
 }
 
 pub fn run(a: &EstimateArgs) -> Result<()> {
-    if let Some(path) = &a.table {
-        if a.lab || a.out.is_some() || a.emit_firmware.is_some() || a.json {
-            bail!("`--table` runs every regime and writes its table: give it alone (with `--duration` at most)");
-        }
-        if let Some(d) = a.duration {
-            // The table's regimes run at 3 ms (lab) and 10 ms (arm).
-            check_duration(d, 0.01)?;
-            check_duration(d, 0.003)?;
-        }
-        return crate::estimate::table::write(path, a.duration);
-    }
     let scene = Scene::load(&a.scene)?;
     let baseline = crate::estimate::BaselineLoad {
         step: a.load_step,
@@ -69,9 +58,6 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
     };
     baseline.validate()?;
     if a.lab {
-        if a.emit_firmware.is_some() {
-            bail!("`--emit-firmware` takes the arm's scene (`--scene scenes/mast-arm.toml`), not `--lab`");
-        }
         let duration = a.duration.unwrap_or(scene.file.duration);
         let h = scene.file.integrator.step;
         check_duration(duration, h)?;
@@ -115,12 +101,6 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
             "invalid option `--frequency` {}: allowed only with `--lab` (the twin's loads come from the scene)",
             a.frequency.unwrap_or(f64::NAN)
         );
-    }
-    if let Some(path) = &a.emit_firmware {
-        let text = crate::estimate::firmware::constants(&scene)?;
-        crate::output::atomic_write(path, text.as_bytes())?;
-        println!("wrote {}", path.display());
-        return Ok(());
     }
     let duration = a.duration.unwrap_or(scene.file.duration);
     check_duration(duration, scene.file.integrator.step)?;

@@ -430,7 +430,7 @@ pub fn twin(
     if let Some(spec) = m.spec(SensorKind::TipAccel) {
         let noise = constant::FilterNoise {
             measurement: spec.noise_sd(),
-            load_step: baseline.step.unwrap_or(super::firmware::LOAD_STEP),
+            load_step: baseline.step.unwrap_or(super::LOAD_STEP),
             bias_step: filter::ACCEL_BIAS_WALK,
             load_time: baseline.time,
             step: h,

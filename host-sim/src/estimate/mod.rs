@@ -20,9 +20,7 @@
 pub mod arm;
 pub mod constant;
 pub mod filter;
-pub mod firmware;
 pub mod lab;
-pub mod table;
 
 pub use arm::{twin, TwinReport};
 pub use constant::{design, BaselineLoad, FilterNoise};
@@ -34,6 +32,12 @@ use absorber_core::monitor::stress::RootSection;
 use absorber_core::{ArmParams, Params};
 use anyhow::{anyhow, Result};
 use serde::Serialize;
+
+/// Standard deviation of the constant-gain estimator's tip-load random walk per sample \[N\]
+/// (the twin's and the firmware's default).
+pub const LOAD_STEP: f64 = 0.5;
+/// Time constant of its tip-load model \[s\].
+pub const LOAD_TIME: f64 = 5.0;
 
 /// The estimator's model: `N = 3` elements.
 pub const N: usize = 3;
@@ -48,7 +52,7 @@ pub const TRUTH_TOLERANCE: f64 = 1e-11;
 pub const TRUTH_ELEMENTS: usize = 16;
 
 /// `absorber_core::Error` → `anyhow`.
-pub(crate) fn core(e: absorber_core::Error) -> anyhow::Error {
+pub fn core(e: absorber_core::Error) -> anyhow::Error {
     anyhow!("{e}")
 }
 

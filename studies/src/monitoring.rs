@@ -1,12 +1,12 @@
 //! The regimes × sensor sets × estimators table of `docs/monitoring.md`
-//! (`host-sim estimate --table FILE`): the lab study off the absorber's tuning and at its
+//! (`absorber-studies monitoring`): the lab study off the absorber's tuning and at its
 //! working point, and the mast arm's scenes of `scenes/` (first-mode wind, von Kármán wind,
 //! second-mode vortex lock-in read by a ±8 g and by the shipped ±2 g accelerometer).
 
-use super::lab::EnsembleEstimator;
-use super::EstimatorReport;
-use crate::scene::Scene;
 use anyhow::{Context, Result};
+use host_sim::estimate::lab::EnsembleEstimator;
+use host_sim::estimate::EstimatorReport;
+use host_sim::scene::Scene;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -20,7 +20,7 @@ pub const LAB: [(f64, &str); 4] = [
 ];
 
 /// Realizations of the lab study at the working point (the free ball is chaotic there: doc
-/// of [`super::lab::LabEnsemble`]); off tuning one.
+/// of [`host_sim::estimate::lab::LabEnsemble`]); off tuning one.
 pub const LAB_MEMBERS: u32 = 4;
 
 /// The arm's scenes (in `scenes/`) and their regimes.
@@ -96,9 +96,9 @@ fn ensemble_rows(md: &mut String, g: &Regime) {
 }
 
 /// The markers between which [`write`] puts the table in an existing file.
-pub const BEGIN: &str = "<!-- estimate --table: begin (generated, do not edit) -->";
+pub const BEGIN: &str = "<!-- absorber-studies monitoring: begin (generated, do not edit) -->";
 /// See [`BEGIN`].
-pub const END: &str = "<!-- estimate --table: end -->";
+pub const END: &str = "<!-- absorber-studies monitoring: end -->";
 
 /// The text of `path` with the table `md` between [`BEGIN`] and [`END`] (a file without the
 /// markers, or none, gets the table alone).
@@ -124,15 +124,15 @@ fn splice(path: &Path, md: &str) -> Result<String> {
 pub fn write(path: &Path, duration: Option<f64>) -> Result<()> {
     let mut regimes = Vec::new();
     for (f, name) in LAB {
-        eprintln!("estimate --table: {name} …");
+        eprintln!("monitoring: {name} …");
         let mut scene = Scene::paper();
         scene.file.excitation.frequency = Some(f);
         let members = if f < 4.0 { 1 } else { LAB_MEMBERS };
-        let mut ens = super::lab::lab_ensemble(
+        let mut ens = host_sim::estimate::lab::lab_ensemble(
             &scene,
             duration.unwrap_or(60.0),
             0.05,
-            super::BaselineLoad::default(),
+            host_sim::estimate::BaselineLoad::default(),
             members,
         )?;
         let r = ens.reports.swap_remove(0);
@@ -145,11 +145,12 @@ pub fn write(path: &Path, duration: Option<f64>) -> Result<()> {
         });
     }
     for (file, name) in ARM {
-        eprintln!("estimate --table: {name} …");
+        eprintln!("monitoring: {name} …");
         let scene = Scene::load(scene_file(file).to_string_lossy().as_ref())
             .with_context(|| format!("scene {file}"))?;
         let d = duration.unwrap_or(scene.file.duration);
-        let (r, _) = super::twin(&scene, d, super::BaselineLoad::default())?;
+        let (r, _) =
+            host_sim::estimate::twin(&scene, d, host_sim::estimate::BaselineLoad::default())?;
         regimes.push(Regime {
             regime: name.into(),
             verdict: r.verdict,
@@ -195,11 +196,11 @@ pub fn write(path: &Path, duration: Option<f64>) -> Result<()> {
         "\nWorking-point rows: mean (least–greatest) over {LAB_MEMBERS} realizations (sensor seeds and 10⁻¹² rad of the truth's initial ball angle), NIS mean ± sd, the verdict on the pooled samples and the members' verdicts (ok / degraded / failed)."
     );
     let text = splice(path, &md)?;
-    crate::output::atomic_write(path, text.as_bytes())?;
+    host_sim::output::atomic_write(path, text.as_bytes())?;
     let json = path.with_extension("json");
-    crate::output::atomic_write(&json, serde_json::to_string_pretty(&regimes)?.as_bytes())?;
+    host_sim::output::atomic_write(&json, serde_json::to_string_pretty(&regimes)?.as_bytes())?;
     eprintln!(
-        "estimate --table: wrote {} and {}",
+        "monitoring: wrote {} and {}",
         path.display(),
         json.display()
     );
