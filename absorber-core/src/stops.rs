@@ -74,8 +74,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 }
             }
             Contact::OnStop(side) => {
-                if side.sign::<T>() * self.contact_force(next) > T::zero() {
-                    next.contact = Contact::Off;
+                // Released where the face it rests against would pull: onto the track, or
+                // from the stop's other face onto the arc beyond.
+                let beyond = next.flight.beyond;
+                if self.stop_pull(next, side, beyond) > T::zero() {
+                    next.contact = if beyond {
+                        Contact::Beyond
+                    } else {
+                        Contact::Off
+                    };
                 }
             }
             Contact::InFlight | Contact::Beyond => {} // (flight events: crate::flight)
@@ -178,9 +185,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         let mut end = mid;
         self.sub_step(&mid, rest, base_accel, ws, report, &mut end)?;
         // A second crossing within the same (remaining) step: the ball came straight back
-        // onto the stop; end the step with it resting there (plastic: a second impact).
-        if inside && end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
-            self.rest_on_stop(&mut end, ws, report)?;
+        // onto the stop; end the step with it resting there (plastic: a second impact). The
+        // same from beyond: a ball pressed back onto the stop's other face (by gravity, on the
+        // arc beyond) rests against it; before, it bounced off it every step.
+        let back = if inside {
+            end.contact == Contact::Off && self.relative_angle(&end).abs() > stop
+        } else {
+            end.contact == Contact::Beyond
+                && crate::flight::wrap(self.relative_angle(&end)).abs() < stop
+        };
+        if back {
+            self.rest_on_stop(&mut end, !inside, ws, report)?;
             report.events.impacts += 1;
         }
         report.impact = Some(impact);
@@ -279,16 +294,18 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         };
         // (The stick test's residual is charged to the work cap; unaffordable, no test: the
         // ball rebounds plastically and the step is flagged.)
-        if plastic && inside && ws.afford_event(crate::newton::work::RESIDUAL) {
-            // Stay on the stop if the contact force is compressive. Tried on `s` itself (what
-            // holding changes is saved and put back otherwise: no second state in the frame).
+        if plastic && ws.afford_event(crate::newton::work::RESIDUAL) {
+            // Stay on the stop if the contact force is compressive: against the track's face,
+            // or from beyond against its other face. Tried on `s` itself (what holding changes
+            // is saved and put back otherwise: no second state in the frame).
             let saved = (s.contact, s.a, s.pseudo_accel, Self::spin_of(s));
             s.contact = Contact::OnStop(side);
+            s.flight.beyond = !inside;
             self.hold_on_stop(s, side);
             let acc = self.consistent_acceleration(s, ws, self.params.integrator.newton)?;
             s.a = acc.x;
             s.pseudo_accel = s.a;
-            if side.sign::<T>() * self.contact_force(s) <= T::zero() {
+            if self.stop_pull(s, side, !inside) <= T::zero() {
                 impact.stuck = true;
             } else {
                 let (contact, a, pseudo_accel, spin) = saved;
@@ -297,6 +314,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             }
         }
         Ok(impact)
+    }
+
+    /// The pull the face a ball held on the stop `side` rests against would have to exert (at
+    /// `s`, with its consistent acceleration; positive: it pulls, the ball goes): the track's
+    /// face pushes the ball towards the track, `side · F ≤ 0` for the contact force `F` along
+    /// θ, the stop's other face (`beyond`) away from it, `side · F ≥ 0`.
+    pub(crate) fn stop_pull(&self, s: &State<T, D>, side: Side, beyond: bool) -> T {
+        let force = side.sign::<T>() * self.contact_force(s);
+        if beyond {
+            -force
+        } else {
+            force
+        }
     }
 
     /// Makes the impulse metric of the mode `contact` the current factors: the Newmark matrix
