@@ -49,9 +49,15 @@ use crate::kin::{RB1, RB2};
 use absorber_core::flight::{hermite_root, separation_fraction};
 use absorber_core::{Contact, Error, Landing, Side, StepReport};
 
-/// A rolling ball starting a step this far beyond a stop \[rad\] still counts as between the
-/// stops (put on the stop by an impact, to rounding): the core's `stops::BEYOND_MARGIN`.
+/// A flying ball starting a step this far beyond a stop \[rad\] counts on the side of the
+/// last stop line it was put on ([`FullState::beyond`]; to rounding, it sits on it): the
+/// core's `flight::STOP_MARGIN`.
 pub(super) const BEYOND_MARGIN: f64 = 1e-3;
+
+/// A flying ball that hits a stop from the arc beyond it, or takes off from the stop's other
+/// face, is put this far beyond the stop line \[rad\] (the core's `flight::BEYOND_OFFSET`), so
+/// that it starts the rest of its step, moving away from the stop, on the side it came from.
+pub(super) const BEYOND_OFFSET: f64 = 1e-5;
 
 /// `x > 0` (false for NaN).
 fn positive(x: f64) -> bool {
@@ -183,18 +189,22 @@ impl FullSolver {
     }
 
     /// A stop met by the flying ball between `from` and `to` (spec rule 3 with revision 4):
-    /// side, whether it came from between the stops (within [`BEYOND_MARGIN`], as on the
-    /// track), crossing fraction.
+    /// side, whether it came from between the stops (within [`BEYOND_MARGIN`] of a stop line,
+    /// the side it was put on, [`FullState::beyond`]), crossing fraction.
     fn stop_crossing(&self, from: &FullState, to: &FullState) -> Option<(Side, bool, f64)> {
         if !self.scene.stops() || !self.at_stop_height(from) || !self.at_stop_height(to) {
             return None;
         }
         let stop = self.params.ball.stop_angle;
         let (alpha0, alpha1) = self.branch_angles(from, to);
-        // A ball put onto the stop line by a stop impact sits on it to rounding: it starts
-        // between the stops (the rolling rule's margin; without it, a start at α_max + 1 ulp
-        // counted as beyond the stop and the impulse of the rest of the step was reversed).
-        let inside = alpha0.abs() <= stop + BEYOND_MARGIN;
+        // A ball put onto the stop line by a stop impact sits on it to rounding: it starts on
+        // the side it came from (without the margin, a start at α_max + 1 ulp counted as
+        // beyond the stop and the impulse of the rest of the step was reversed). From beyond,
+        // it is put `BEYOND_OFFSET` beyond the line: counted between the stops (as the margin
+        // alone did) it got a second, spurious impulse from the stop's track face at the end
+        // of the rest of its step, which sent it back through the stop.
+        let near = alpha0.abs() <= stop + BEYOND_MARGIN;
+        let inside = alpha0.abs() <= stop || (near && !from.beyond);
         if inside == (alpha1.abs() <= stop) {
             return None;
         }
@@ -259,12 +269,28 @@ impl FullSolver {
         if end.contact == Contact::InFlight || !positive(-self.normal_force(end)?) {
             return Ok(());
         }
-        end.contact = Contact::InFlight;
-        end.lifted = false;
+        self.leave_track(end);
         self.restart_acceleration(end, report)?;
         report.separation = Some(time);
         self.note_lift(end, 0.0, report);
         Ok(())
+    }
+
+    /// The ball at `s` leaves the track (positions and velocities are the maximal coordinates:
+    /// continuous). Held against a stop's other face, it leaves from `BEYOND_OFFSET` beyond the
+    /// stop line (its centre turned about A; 0.3 µm), as one put there by a stop impact from
+    /// beyond (the core's `fly_from_track`). `beyond` stays: the side it leaves from.
+    fn leave_track(&self, s: &mut FullState) {
+        if let (Contact::OnStop(side), true) = (s.contact, s.beyond) {
+            let (a, _) = self.end_point(s);
+            let (i1, i2) = (self.zloc(RB1), self.zloc(RB2));
+            let d = [s.q[i1] - a[0], s.q[i2] - a[1]];
+            let (sin, cos) = (side.sign::<f64>() * BEYOND_OFFSET).sin_cos();
+            s.q[i1] = a[0] + d[0] * cos - d[1] * sin;
+            s.q[i2] = a[1] + d[0] * sin + d[1] * cos;
+        }
+        s.contact = Contact::InFlight;
+        s.lifted = false;
     }
 
     /// The flight at `s` reaches the counted height: `height` \[m\] (the gap at a step's end
@@ -346,8 +372,7 @@ impl FullSolver {
         let accel_mid = start.base_accel + (base_accel - start.base_accel) * tau;
         let mut mid = self.sub_step(start, h1, accel_mid, report)?;
         // Take-off: positions and velocities are the maximal coordinates (continuous).
-        mid.contact = Contact::InFlight;
-        mid.lifted = false;
+        self.leave_track(&mut mid);
         self.note_lift(&mut mid, 0.0, report);
         self.restart_acceleration(&mut mid, report)?;
         report.separation = Some(mid.time);
@@ -425,12 +450,13 @@ impl FullSolver {
                 self.land(&mut end, report)?;
             }
         } else if self.scene.stops() && end.contact == Contact::Off {
-            // Landed (plastic) and rolled across a stop within the rest: from between the
-            // stops it rests there (plastic, released at once if the stop would pull); from
-            // the arc beyond, the stop's other face pushes it back (never sticks).
+            // Landed (plastic) and rolled across a stop within the rest: it rests there
+            // (plastic, released at once if the stop would pull), from between the stops on
+            // its track face, from the arc beyond on its other face (counted as the impact it
+            // is; the core's `landed_rest`).
             let stop = self.params.ball.stop_angle;
             let (a0, a1) = self.branch_angles(mid, &end);
-            let inside = a0.abs() <= stop + BEYOND_MARGIN;
+            let inside = !mid.beyond;
             if inside != (a1.abs() <= stop) {
                 let outer = if inside { a1 } else { a0 };
                 let side = if outer > 0.0 {
@@ -438,13 +464,8 @@ impl FullSolver {
                 } else {
                     Side::Negative
                 };
-                if inside {
-                    end = self.rest_on_stop(&end, side)?;
-                } else {
-                    let before = end.clone();
-                    let impact = self.impact(&mut end, side, false)?;
-                    self.after_impulse(&mut end, &before);
-                    report.impact = report.impact.or(Some(impact));
+                end = self.rest_on_stop(&end, side, !inside)?;
+                if !inside {
                     report.events.impacts += 1;
                 }
             }

@@ -159,6 +159,11 @@ pub struct FullState {
     /// In flight: the flight has reached `ball.lift_height` and counts as a separation (the
     /// core's `Flight::lifted`).
     pub lifted: bool,
+    /// The ball is on the stops' far side, the arc beyond them (the core's `Contact::Beyond`
+    /// and `Flight::beyond`): rolling there (`Off`), resting against a stop's other face
+    /// (`OnStop`), or in flight the side of the last stop line it was put on (read within
+    /// `BEYOND_MARGIN` of a stop line, where a position cannot tell the side).
+    pub beyond: bool,
 }
 
 /// Factorizations and scratch kept between solves. The solver's methods take `&self` (a step
@@ -299,6 +304,7 @@ impl FullSolver {
             contact: Contact::Off,
             theta_ref: 0.0,
             lifted: false,
+            beyond: false,
         };
         let me = element.blended_mass_matrix(params.calibration.mass_lumping);
         let kb = element.bending_stiffness();

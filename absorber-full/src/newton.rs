@@ -225,6 +225,7 @@ impl FullSolver {
             contact,
             theta_ref: prev.theta_ref,
             lifted: prev.lifted,
+            beyond: prev.beyond,
         };
         let nb = 4 * self.n;
         s.q[4..4 + nb].copy_from_slice(&qi[..nb]);

@@ -224,21 +224,28 @@ impl FullSolver {
                     }
                     return Ok(next);
                 }
-                let (a0, a1) = self.branch_angles(start, &next);
-                let inside = a0.abs() <= stop + flight::BEYOND_MARGIN;
+                let (_, a1) = self.branch_angles(start, &next);
+                // Between the stops or on the arc beyond them: the ball's side, kept since it
+                // landed, hit a stop or left one (the core's `Contact::Beyond`). Told by the
+                // angle with a margin, a ball put on a stop line counted between the stops
+                // (from beyond, too) and one rolling on the arc beyond that started a step
+                // within the margin of a stop passed through its other face.
+                let inside = !start.beyond;
                 if inside == (a1.abs() <= stop) {
                     return Ok(next);
                 }
                 self.step_with_impact(start, &next, h, base_accel, inside, report)
             }
             Contact::OnStop(side) => {
-                if side.sign::<f64>() * self.contact_force(&next)? > 0.0 {
+                // Released where the face it rests against would pull (then on the side of
+                // that face: `beyond` stays).
+                if self.stop_pull(&next, side, next.beyond)? > 0.0 {
                     next.contact = Contact::Off;
                 }
                 Ok(next)
             }
-            // (Beyond is the core's marker; this solver tells a ball beyond the stops by its
-            // angle, the Off arm above.)
+            // (Beyond is the core's marker; this solver keeps it in `FullState::beyond`, the
+            // Off arm above.)
             Contact::InFlight | Contact::Beyond => Ok(next),
         }
     }
@@ -309,14 +316,23 @@ impl FullSolver {
             mid
         };
         // A second crossing within the same (remaining) step: the ball came straight back
-        // onto the stop; end the step with it resting there (plastic).
-        if inside && end.contact == Contact::Off && self.relative_angle(&end).abs() > stop {
-            let side2 = if self.relative_angle(&end) > 0.0 {
+        // onto the stop; end the step with it resting there (plastic). The same from beyond:
+        // a ball pressed back onto the stop's other face (by gravity, on the arc beyond) rests
+        // against it (the core's `impact_step`).
+        let alpha = flight::wrap(self.relative_angle(&end));
+        let back = end.contact == Contact::Off
+            && if inside {
+                self.relative_angle(&end).abs() > stop
+            } else {
+                alpha.abs() < stop
+            };
+        if back {
+            let side2 = if alpha > 0.0 {
                 Side::Positive
             } else {
                 Side::Negative
             };
-            end = self.rest_on_stop(&end, side2)?;
+            end = self.rest_on_stop(&end, side2, !inside)?;
             report.events.impacts += 1;
         }
         report.impact = Some(impact);
@@ -370,16 +386,32 @@ impl FullSolver {
         Ok(())
     }
 
-    /// The rolling ball put on the stop `side` and held there (plastic), with its consistent
-    /// acceleration; released at once if the stop would pull.
-    pub(super) fn rest_on_stop(&self, s: &FullState, side: Side) -> Result<FullState, Error> {
+    /// The rolling ball put on the stop `side` and held there (plastic), against its track
+    /// face or from `beyond` against its other face, with its consistent acceleration;
+    /// released at once if the stop would pull.
+    pub(super) fn rest_on_stop(
+        &self,
+        s: &FullState,
+        side: Side,
+        beyond: bool,
+    ) -> Result<FullState, Error> {
         let mut end = self.hold(s, side)?;
+        end.beyond = beyond;
         let acc = self.consistent_acceleration(&end)?;
         end = self.with_accel(&end, &acc.x)?;
-        if side.sign::<f64>() * self.contact_force(&end)? > 0.0 {
+        if self.stop_pull(&end, side, beyond)? > 0.0 {
             end.contact = Contact::Off;
         }
         Ok(end)
+    }
+
+    /// The pull the face a ball held on the stop `side` rests against would have to exert
+    /// (positive: it pulls, the ball goes): the track's face pushes the ball towards the
+    /// track, `side · F ≤ 0` for the contact force `F` along θ, the stop's other face
+    /// (`beyond`) away from it (the core's `System::stop_pull`).
+    pub(super) fn stop_pull(&self, s: &FullState, side: Side, beyond: bool) -> Result<f64, Error> {
+        let force = side.sign::<f64>() * self.contact_force(s)?;
+        Ok(if beyond { -force } else { force })
     }
 
     /// The state with the ball put on the stop and held there (φ becomes dependent).
@@ -415,7 +447,7 @@ impl FullSolver {
     /// Stop impact: projects the ball onto the stop, applies `Λ ∇αᵀ` with
     /// `Λ = −(1+e) α̇⁻ / (∇α W⁻¹ ∇αᵀ)` if the ball moves towards the stop's face (outwards from
     /// between the stops, `inside`, inwards from the arc beyond), decides whether the ball stays
-    /// on the stop (only from between the stops).
+    /// on the stop (against the face it met).
     pub(super) fn impact(
         &self,
         s: &mut FullState,
@@ -431,6 +463,7 @@ impl FullSolver {
         // (On the held state's branch of θ: φ was re-based with it.)
         s.theta_ref = held.theta_ref;
         s.contact = Contact::Off;
+        s.beyond = !inside;
         let mode = Mode::Free;
         let qi = self.gather_ind(&s.q, mode);
         let mut vi = self.gather_ind(&s.v, mode);
@@ -500,11 +533,13 @@ impl FullSolver {
             impact.impulse = lambda / ball.path_radius();
             impact.energy_loss = 0.5 * (1.0 - e * e) * speed * speed / wgt;
         }
-        if plastic && inside {
+        // Stays on the stop if the contact force is compressive: against the track's face, or
+        // from beyond against its other face.
+        if plastic {
             let mut held = self.hold(s, side)?;
             let acc = self.consistent_acceleration(&held)?;
             held = self.with_accel(&held, &acc.x)?;
-            if side.sign::<f64>() * self.contact_force(&held)? <= 0.0 {
+            if self.stop_pull(&held, side, !inside)? <= 0.0 {
                 *s = held;
                 impact.stuck = true;
             }

@@ -183,6 +183,8 @@ impl FullSolver {
         s.q[self.zloc(PHI)] = (b.rtr * psi - b.rho * theta) / b.rb;
         s.theta_ref = theta;
         s.contact = Contact::Off;
+        // On the track between the stops, or on the arc beyond them (the core's `Beyond`).
+        s.beyond = self.scene.stops() && wrap(theta - psi).abs() > ball.stop_angle;
         let mode = Mode::Free;
         let qi = self.gather_ind(&s.q, mode);
         let mut vi = self.gather_ind(&s.v, mode);
@@ -246,13 +248,19 @@ impl FullSolver {
         let ball = &self.params.ball;
         let psi = s.q[self.zloc(PSI)];
         let rel = self.relative(s);
-        let theta = psi + side.sign::<f64>() * ball.stop_angle;
+        let line = if inside {
+            ball.stop_angle
+        } else {
+            ball.stop_angle + super::BEYOND_OFFSET
+        };
+        let theta = psi + side.sign::<f64>() * line;
         let (sin, cos) = theta.sin_cos();
         let (a, _) = self.end_point(s);
         let (i1, i2) = (self.zloc(RB1), self.zloc(RB2));
         s.q[i1] = a[0] + rel.r * sin;
         s.q[i2] = a[1] - rel.r * cos;
         s.theta_ref = theta;
+        s.beyond = !inside;
         let mode = Mode::Flying;
         let loc0 = 4 * self.n - 4;
         let qi = self.gather_ind(&s.q, mode);
