@@ -93,7 +93,9 @@ fn config(params: &Params<f32>, corner: f32) -> Result<EkfConfig<f32, MODES>, Er
         gate: 3.0,
         event_error: 0.0,
         event_window: 30,
-        adapt_time: 20.0,
+        adapt_time: 1.0,
+        lower_time: 2.0,
+        load_scale_min: 1.0,
     })
 }
 

@@ -112,13 +112,48 @@ pub struct EkfConfig<T, const M: usize> {
     pub event_error: T,
     /// Samples after a ball event during which `event_error` applies.
     pub event_window: u32,
-    /// Time constant of the model error measured online \[s\] (0: none): the innovations'
-    /// variance beyond the filter's own prediction, `E[ν²] − (h P hᵀ + r)`, averaged
-    /// (exponentially, bias-corrected) apart away from and near the ball's events, becomes the
-    /// model error's variance where it exceeds `model_error` and `event_error` (covariance
-    /// matching, Mehra 1972; `docs/monitoring.md`, "Noise model"). Innovations beyond the
-    /// gate enter it at the gate.
+    /// Time constant of the model error measured online \[s\] (0: none; `docs/monitoring.md`,
+    /// "Noise model"). Per sensor, apart away from and near the ball's events, the
+    /// innovations' excess over the filter's prediction without model error,
+    /// `ν² − h P hᵀ − σ_n²`, and the predicted reading's mean square `r²` are averaged
+    /// (exponentially, with the same weights) over the samples where `r²` exceeds
+    /// [`MEASURABLE`] noise variances; their ratio is the relative model error's variance
+    /// measured (covariance matching, Mehra 1972, in recursive form), blended with
+    /// `model_error²` (`+ event_error²` near events) by the means' accumulated weight. The
+    /// variance in use rises to it at once and falls to it with [`EkfConfig::lower_time`].
+    /// Innovations beyond the gate enter at the gate.
     pub adapt_time: T,
+    /// Time constant with which the model error in use and the load model's scale fall to
+    /// what is measured \[s\] (0: never below `model_error` and `event_error`, which the
+    /// online estimate then only raises). Longer than [`EkfConfig::adapt_time`]: an
+    /// episode's onset or an impact is not met by an overconfident filter.
+    pub lower_time: T,
+    /// Least scale λ of the load model's and the modal noise's process noise (1: fixed). While
+    /// the innovations are smaller than predicted with no model error left (the excess
+    /// negative in every sensor), λ falls with [`EkfConfig::lower_time`] by the running mean
+    /// NIS `n̄`, `λ ← λ (1 − μ_d (1 − n̄)/n̄)`; above 1 it rises with
+    /// [`EkfConfig::adapt_time`], `λ ← λ (1 + μ_a (n̄ − 1))`, to at most 1 (the design load
+    /// bounds it).
+    pub load_scale_min: T,
+}
+
+/// The predicted reading's mean square above which the model error is measured, in noise
+/// variances: where the model's prediction is within a few noise sd of zero, the excess is the
+/// noise's and its ratio to `r²` is not the model's error.
+pub const MEASURABLE: f64 = 100.0;
+
+/// The model error measured online for one sensor and one slot (away from or near the ball's
+/// events; [`EkfConfig::adapt_time`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Adapt<T> {
+    /// Exponential mean of the innovations' excess `ν² − h P hᵀ − σ_n²`.
+    excess: T,
+    /// Exponential mean of the predicted reading's mean square `r²`, the same weights.
+    square: T,
+    /// The means' accumulated weight (0 → 1).
+    weight: T,
+    /// The relative model error's variance in use, `ε_u²`.
+    in_use: T,
 }
 
 /// What the filter says after a sample.
@@ -222,11 +257,17 @@ pub struct Ekf<T: Real, S: Scene, const N: usize, const D: usize, const M: usize
     bias: [T; KINDS],
     /// Running mean square of each predicted dynamic measurement.
     rms2: [T; KINDS],
-    /// Per sensor, away from and near events: the model error's variance measured online
-    /// (exponential mean of the excess) and the mean's accumulated weight (its bias
-    /// correction).
-    adapt: [[(T, T); 2]; KINDS],
+    /// Per sensor, away from and near events: the model error measured online and in use
+    /// ([`EkfConfig::adapt_time`]).
+    adapt: [[Adapt<T>; 2]; KINDS],
+    /// Weights per sample of the online means (`h / adapt_time`) and of the lowering
+    /// (`h / lower_time`; 0: none).
     adapt_weight: T,
+    lower_weight: T,
+    /// The load model's process noise scale λ in use ([`EkfConfig::load_scale_min`]) and the
+    /// running mean NIS away from events that moves it.
+    load_scale: T,
+    nis_mean: T,
     rms_weight: T,
     /// Modal stress recovery: `σ += w_q·(q − q_eq) + w_v·v + w_a·q̈`.
     recover: [SVector<T, D>; 3],
@@ -360,12 +401,15 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             || !finite_nonneg(&config.gate)
             || !finite_nonneg(&config.event_error)
             || !finite_nonneg(&config.adapt_time)
+            || !finite_nonneg(&config.lower_time)
+            || !positive(config.load_scale_min)
+            || config.load_scale_min > T::one()
             || !finite_nonneg(&config.load_mean_time)
             || !finite_nonneg(&config.load_mean_sd)
         {
             return Err(Error::InvalidParameter {
                 field: "estimator",
-                reason: "stress factors and the RMS time must be positive, the standard deviations finite and not negative",
+                reason: "stress factors and the RMS time must be positive, the least load scale in (0, 1], the standard deviations and times finite and not negative",
             });
         }
         if config.sensors.get(SensorKind::BallAngle).is_some() && !matches!(S::BALL, BallKind::Free)
@@ -479,12 +523,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             bias: [T::zero(); KINDS],
             rms2: [T::zero(); KINDS],
             rms_weight: (h / config.rms_time).min(T::one()),
-            adapt: [[(T::zero(), T::zero()); 2]; KINDS],
+            adapt: Self::priors(&config),
             adapt_weight: if is_positive(config.adapt_time) {
                 (h / config.adapt_time).min(T::one())
             } else {
                 T::zero()
             },
+            lower_weight: if is_positive(config.lower_time) {
+                (h / config.lower_time).min(T::one())
+            } else {
+                T::zero()
+            },
+            load_scale: T::one(),
+            nis_mean: T::one(),
             recover: [SVector::zeros(); 3],
             static_stress: T::zero(),
             modulus: model.params().beam.modulus,
@@ -500,6 +551,25 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             damping: None,
             _scene: core::marker::PhantomData,
         }
+    }
+
+    /// The online model errors at the start: nothing measured, the calibrated model error in
+    /// use (`model_error²`, near events `+ event_error²`).
+    fn priors(config: &EkfConfig<T, M>) -> [[Adapt<T>; 2]; KINDS] {
+        let mut a = [[Adapt {
+            excess: T::zero(),
+            square: T::zero(),
+            weight: T::zero(),
+            in_use: T::zero(),
+        }; 2]; KINDS];
+        let e2 = config.event_error * config.event_error;
+        for (slots, s) in a.iter_mut().zip(config.sensors.slots.iter()) {
+            let m2 = s.map_or(T::zero(), |s| s.model_error * s.model_error);
+            for (j, x) in slots.iter_mut().enumerate() {
+                x.in_use = if j == 0 { m2 } else { m2 + e2 };
+            }
+        }
+        a
     }
 
     /// The modal stress recovery vectors (module doc of [`EkfConfig::stress_factors`]):
@@ -593,6 +663,17 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     /// The estimated tip load of the last step \[N\].
     pub fn load(&self) -> T {
         self.load
+    }
+
+    /// The load model's process noise scale λ in use ([`EkfConfig::load_scale_min`]).
+    pub fn load_scale(&self) -> T {
+        self.load_scale
+    }
+
+    /// Per sensor kind (by [`SensorKind::index`]), away from and near the ball's events: the
+    /// relative model error in use, `ε_u` ([`EkfConfig::adapt_time`]).
+    pub fn model_errors(&self) -> [[T; 2]; KINDS] {
+        self.adapt.map(|slots| slots.map(|a| a.in_use.sqrt()))
     }
 
     /// The estimated bias of each sensor kind (by [`SensorKind::index`]).
@@ -741,6 +822,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         let mut adapt = self.adapt;
         let slot = usize::from(near_event);
         let mut model_error_ratio = [T::zero(); KINDS];
+        // The load scale's inputs: the readings' NIS (at the gate), and whether every reading
+        // used had its model error measured at zero away from events.
+        let mut nis_capped = T::zero();
+        let mut lowerable = true;
         for kind in SensorKind::ALL {
             let k = kind.index();
             let Some(sensor) = self.config.sensors.get(kind).copied() else {
@@ -788,27 +873,19 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             // Linearized: the predicted reading moves with the corrections made so far.
             let innovation = y - predicted - bias - row.dot(&delta);
             let scale2 = rms2.get(k).copied().unwrap_or(T::zero());
-            let mut floor2 = sensor.model_error * sensor.model_error;
-            if near_event {
-                floor2 += self.config.event_error * self.config.event_error;
-            }
-            let (mean, weight) = adapt
+            let a = adapt
                 .get(k)
                 .and_then(|a| a.get(slot))
                 .copied()
-                .unwrap_or((T::zero(), T::zero()));
-            let measured = if is_positive(weight) {
-                mean / weight
-            } else {
-                T::zero()
-            };
-            let model2 = (floor2 * scale2).max(measured);
+                .unwrap_or(Adapt {
+                    excess: T::zero(),
+                    square: T::zero(),
+                    weight: T::one(),
+                    in_use: T::zero(),
+                });
+            let model2 = a.in_use * scale2;
             if let Some(x) = model_error_ratio.get_mut(k) {
-                *x = if is_positive(scale2) {
-                    (model2 / scale2).sqrt()
-                } else {
-                    T::zero()
-                };
+                *x = a.in_use.sqrt();
             }
             let noise2 = sensor.noise * sensor.noise;
             let r = noise2 + model2;
@@ -822,19 +899,44 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             let s0 = hph + r;
             let nis = innovation * innovation / s0;
             let gate = self.config.gate;
-            if is_positive(self.adapt_weight) {
-                // The excess of this innovation over the prediction without model error,
-                // winsorized at the gate.
-                let mut nu2 = innovation * innovation;
-                if is_positive(gate) && nu2 > gate * gate * s0 {
-                    nu2 = gate * gate * s0;
-                }
-                let w = self.adapt_weight;
-                if let Some(a) = adapt.get_mut(k).and_then(|a| a.get_mut(slot)) {
-                    a.0 += w * (nu2 - hph - noise2 - a.0);
-                    a.1 += w * (T::one() - a.1);
-                }
+            // The innovation winsorized at the gate.
+            let mut nu2 = innovation * innovation;
+            if is_positive(gate) && nu2 > gate * gate * s0 {
+                nu2 = gate * gate * s0;
             }
+            if is_positive(self.adapt_weight) && scale2 > lit::<T>(MEASURABLE) * noise2 {
+                // Covariance matching, recursive (`EkfConfig::adapt_time`): the excess of this
+                // innovation over the prediction without model error, per unit of `r²`.
+                let (w, wd) = (self.adapt_weight, self.lower_weight);
+                let excess = a.excess + w * (nu2 - hph - noise2 - a.excess);
+                let square = a.square + w * (scale2 - a.square);
+                let weight = a.weight + w * (T::one() - a.weight);
+                let measured = (excess / square).max(T::zero());
+                let mut prior = sensor.model_error * sensor.model_error;
+                if near_event {
+                    prior += self.config.event_error * self.config.event_error;
+                }
+                let e2 = weight * measured + (T::one() - weight) * prior;
+                let in_use = if e2 >= a.in_use {
+                    e2
+                } else if is_positive(wd) {
+                    a.in_use + wd * (e2 - a.in_use)
+                } else {
+                    a.in_use
+                };
+                lowerable &= !near_event && !is_positive(excess);
+                if let Some(x) = adapt.get_mut(k).and_then(|a| a.get_mut(slot)) {
+                    *x = Adapt {
+                        excess,
+                        square,
+                        weight,
+                        in_use,
+                    };
+                }
+            } else {
+                lowerable = false;
+            }
+            nis_capped += nu2 / s0;
             let mut r_used = r;
             *use_k = ReadingUse::Used;
             if is_positive(gate) && nis > gate * gate {
@@ -848,6 +950,30 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             if let (Some(iv), Some(vv)) = (est_innov.get_mut(k), est_var.get_mut(k)) {
                 *iv = innovation;
                 *vv = s0;
+            }
+        }
+        // The load model's scale (`EkfConfig::load_scale_min`), from the running mean NIS of
+        // the samples away from events.
+        let (mut load_scale, mut nis_mean) = (self.load_scale, self.nis_mean);
+        let lambda_min = self.config.load_scale_min;
+        if is_positive(self.adapt_weight) && lambda_min < T::one() && !near_event && nis_count > 0 {
+            let w = self.adapt_weight;
+            let n = if nis_count == 1 {
+                nis_capped
+            } else {
+                nis_capped / T::from_count(u64::from(nis_count))
+            };
+            nis_mean += w * (n - nis_mean);
+            let excess = nis_mean - T::one();
+            if is_positive(excess) {
+                load_scale = (load_scale * (T::one() + w * excess)).min(T::one());
+            } else if lowerable {
+                // Relaxed toward λ n̄ (the calibration's iteration `λ ← λ Σν²/Σs`) in log form,
+                // `ln λ += μ_d ln n̄`, with `ln n̄ ≥ 1 − 1/n̄` (n̄ at least 0.1: a step never
+                // removes more than 9 μ_d of λ).
+                let n = nis_mean.max(lit(0.1));
+                let step = self.lower_weight * (T::one() - n) / n;
+                load_scale = (load_scale * (T::one() - step)).max(lambda_min);
             }
         }
         // The dummy measurement that the load's running mean is zero.
@@ -880,6 +1006,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         self.ud_d = d;
         self.rms2 = rms2;
         self.adapt = adapt;
+        self.load_scale = load_scale;
+        self.nis_mean = nis_mean;
         self.load = load;
         self.load_rate = load_rate;
         self.load_mean = load_mean;
@@ -1302,7 +1430,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             col[ld] = self.load_noise[0][c];
             col[ld + 1] = self.load_noise[1][c] / self.scale[ld + 1];
             col[ld + 2] = mu * self.load_noise[0][c];
-            push(col, T::one(), &mut self.w2);
+            push(col, self.load_scale, &mut self.w2);
         }
         let half = lit::<T>(0.5);
         for i in 0..M {
@@ -1311,7 +1439,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
             col[M + i] = rec.h / self.scale[M + i];
             push(
                 col,
-                self.config.modal_noise * self.config.modal_noise,
+                self.config.modal_noise * self.config.modal_noise * self.load_scale,
                 &mut self.w2,
             );
         }
@@ -1749,6 +1877,8 @@ mod tests {
             event_error: 0.0,
             event_window: 30,
             adapt_time: 0.0,
+            lower_time: 0.0,
+            load_scale_min: 1.0,
         }
     }
 

@@ -247,6 +247,19 @@ fn print_estimators(e: &[EstimatorReport]) {
         );
         let figures: Vec<String> = r.quality.iter().map(figure_text).collect();
         println!("      {}", figures.join("; "));
+        if r.load_scale.is_finite() {
+            let errors: Vec<String> = ["tip_accel", "ball_angle", "root_strain"]
+                .iter()
+                .zip(r.model_errors)
+                .filter(|(_, e)| e.is_finite())
+                .map(|(id, e)| format!("{id} {e:.4}"))
+                .collect();
+            println!(
+                "      noise model at the end: load scale λ {:.3}; model error ε_u {}",
+                r.load_scale,
+                errors.join(", ")
+            );
+        }
     }
     println!(
         "  health: the monitor's own check on the device (a run is degraded or failed when ≥ 1 % of its samples are); grade: the worst of the figures below each row, against the truth (ok inside the expected range, poor inside a wider one, failed outside)"

@@ -306,6 +306,8 @@ fn setup(
         mode_frequencies,
         window,
         adapt_time: filter::adapt_time(),
+        lower_time: filter::LOWER_TIME,
+        load_scale_min: filter::LOAD_SCALE_MIN,
         load_rms: super::rms(&history),
     };
     // Calibration: 60 s of a tip force with the design load's spectrum (another realization)
@@ -325,12 +327,12 @@ fn setup(
         let m = filter::measure(&t, &a.specs, h, 1)?;
         draws.push((t, m));
     }
-    // ε from the tip accelerometer's innovations: what the online estimate (ADAPT_TIME) has
-    // not yet caught, from the start (a scene without the accelerometer: ε = 0, the online
-    // estimate alone).
+    // ε from the tip accelerometer's innovations with a fixed noise model (`Setup::fixed`):
+    // the prior the studies' filter starts from (a scene without the accelerometer: ε = 0,
+    // the online estimate alone).
     if a.specs.iter().any(|x| x.kind() == SensorKind::TipAccel) {
         s.model_error = filter::matched(|eps| {
-            let mut c = s;
+            let mut c = s.fixed();
             c.model_error = eps;
             let runs = draws
                 .iter()

@@ -421,6 +421,8 @@ pub fn run<S: CoreScene, const D: usize>(
         clipped: [clipped, 0, 0],
         capped: 0,
         load_rms: rms(&loads),
+        load_scale: f64::NAN,
+        model_errors: [f64::NAN; 3],
         quality: Vec::new(),
     };
     let report = EstimatorReport {

@@ -241,6 +241,8 @@ fn setup<S: absorber_core::Scene, const D: usize, const DR: usize>(
             mode_frequencies,
             window,
             adapt_time: filter::adapt_time(),
+            lower_time: filter::LOWER_TIME,
+            load_scale_min: filter::LOAD_SCALE_MIN,
             load_rms: prior.0,
         },
         model,
@@ -290,7 +292,7 @@ fn calibrate_noise(
         Ok(filter::Excess::pooled(runs))
     };
     let eps = filter::matched(|eps| {
-        let mut s = *locked;
+        let mut s = locked.fixed();
         s.model_error = eps;
         Ok(run_locked(&s)?.quiet_excess())
     })?;
@@ -298,7 +300,7 @@ fn calibrate_noise(
     locked.model_error = eps;
     if eps == 0.0 {
         let lambda = filter::matched_load_scale(|lambda| {
-            let mut s = *locked;
+            let mut s = locked.fixed();
             s.load_sd *= lambda.sqrt();
             Ok(run_locked(&s)?.quiet_ratio())
         })?;
@@ -312,7 +314,7 @@ fn calibrate_noise(
         free_draws.push((t, m));
     }
     free.event_error = filter::matched(|eps_e| {
-        let mut s = *free;
+        let mut s = free.fixed();
         s.event_error = eps_e;
         let mut runs = Vec::new();
         for (t, m) in &free_draws {

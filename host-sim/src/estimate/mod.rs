@@ -132,6 +132,13 @@ pub struct EstimatorReport {
     pub capped: usize,
     /// RMS of the estimated tip load \[N\].
     pub load_rms: f64,
+    /// The load model's process noise scale λ at the end (1: the calibrated load model; NaN
+    /// for the constant-gain filter).
+    pub load_scale: f64,
+    /// The relative model error in use at the end, away from the ball's events, per sensor
+    /// kind (tip_accel, ball_angle, root_strain; NaN where not read or for the constant-gain
+    /// filter).
+    pub model_errors: [f64; 3],
     /// Each quality figure beside its expected range and a word ([`Quality`]).
     pub quality: Vec<Quality>,
 }
