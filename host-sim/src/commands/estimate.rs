@@ -1,8 +1,10 @@
 //! `host-sim estimate`: the monitor's estimators against the full solver
-//! ([`crate::estimate`]): the twin of a real arm, the lab study, the regimes' table.
+//! ([`crate::estimate`]): the twin of a real arm and the lab study (the regimes' table is
+//! `absorber-studies monitoring`).
 
 use crate::cli::EstimateArgs;
 use crate::estimate::arm::TwinSeries;
+use crate::estimate::check_duration;
 use crate::estimate::lab::LabSeries;
 use crate::estimate::{EstimatorReport, LabReport, Quality, TwinReport};
 use crate::output::{OutputDir, Status};
@@ -10,28 +12,6 @@ use crate::plot::{render, Panel, Series};
 use crate::scene::Scene;
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
-
-/// Runs the command.
-/// Most steps a study runs: the truth, the estimators and their histories are held in memory
-/// (a few hundred bytes per step: about 2 GB here); 2^23 steps are 23 h at the arm's 10 ms.
-const MAX_STEPS: f64 = 8_388_608.0;
-
-/// Fewest steps a study runs: its statistics (RMS errors, damage ratios) need a response to
-/// measure; 100 steps are 1 s at the arm's 10 ms.
-const MIN_STEPS: f64 = 100.0;
-
-/// Checks `--duration` against the scene's step before anything is allocated.
-fn check_duration(duration: f64, h: f64) -> Result<()> {
-    let steps = duration / h;
-    if !(duration.is_finite() && (MIN_STEPS..=MAX_STEPS).contains(&steps)) {
-        bail!(
-            "invalid value for `--duration`: {duration} s (must lie in {} ..= {} s: {MIN_STEPS} to {MAX_STEPS} steps of h = {h} s; the study holds every step in memory)",
-            MIN_STEPS * h,
-            MAX_STEPS * h
-        );
-    }
-    Ok(())
-}
 
 /// Checks `--tip-force` before anything runs: finite, positive and no more than the arm can
 /// carry, as a scene's sag is checked: a static tip deflection F·L³/(3·E·I) of at most half
@@ -50,6 +30,7 @@ fn check_tip_force(force: f64, scene: &Scene) -> Result<f64> {
     Ok(most)
 }
 
+/// Runs the command.
 pub fn run(a: &EstimateArgs) -> Result<()> {
     let scene = Scene::load(&a.scene)?;
     let baseline = crate::estimate::BaselineLoad {

@@ -30,8 +30,29 @@ use absorber_core::monitor::fatigue::{DetailCategory, StressDamage};
 use absorber_core::monitor::rainflow::Cycle;
 use absorber_core::monitor::stress::RootSection;
 use absorber_core::{ArmParams, Params};
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
+
+/// Most steps a study runs: the truth, the estimators and their histories are held in memory
+/// (a few hundred bytes per step: about 2 GB here); 2^23 steps are 23 h at the arm's 10 ms.
+pub const MAX_STEPS: f64 = 8_388_608.0;
+
+/// Fewest steps a study runs: its statistics (RMS errors, damage ratios) need a response to
+/// measure; 100 steps are 1 s at the arm's 10 ms.
+pub const MIN_STEPS: f64 = 100.0;
+
+/// Checks a study's `--duration` against its step `h` \[s\] before anything is allocated.
+pub fn check_duration(duration: f64, h: f64) -> Result<()> {
+    let steps = duration / h;
+    if !(duration.is_finite() && (MIN_STEPS..=MAX_STEPS).contains(&steps)) {
+        bail!(
+            "invalid value for `--duration`: {duration} s (must lie in {} ..= {} s: {MIN_STEPS} to {MAX_STEPS} steps of h = {h} s; the study holds every step in memory)",
+            MIN_STEPS * h,
+            MAX_STEPS * h
+        );
+    }
+    Ok(())
+}
 
 /// Standard deviation of the constant-gain estimator's tip-load random walk per sample \[N\]
 /// (the twin's and the firmware's default).
