@@ -100,7 +100,7 @@ count() {
     qemu -kernel "$elf" -append "$4" -plugin "$out/step-counter.so,entry=0x$entry$rets,out=$counts,prof=$counts.prof" >/dev/null 2>&1
 }
 rust_elf=$tdir/$target/fw/fw-free
-rust_step=$(arm-none-eabi-nm -C "$rust_elf" | sed -n 's/^[0-9a-f]* [Tt] \(<.* as absorber_firmware::Sim>::step\)$/\1/p')
+rust_step=$(arm-none-eabi-nm -C "$rust_elf" | sed -n 's/^[0-9a-f]* [Tt] \(<.* as absorber_firmware::sim::Sim>::step\)$/\1/p')
 count "$rust_elf" "$rust_step" "$out/rust-step.counts" "expect=$h_free"
 count "$out/absorber-c" absorber_step_f32 "$out/c-step.counts" "expect=$h_free expect-monitor=$h_mon"
 for elf in "$rust_elf" "$tdir/$target/fw/fw-free-monitor" "$out/absorber-c"; do

@@ -368,7 +368,7 @@ def entry_of(profile, scene, pattern):
     return found[0]
 
 
-STEP_FN = r" as absorber_firmware::Sim>::step$"
+STEP_FN = r" as absorber_firmware::sim::Sim>::step$"
 
 
 def op_rows(counts, names):
@@ -504,7 +504,7 @@ for scene, label in SCENES:
 funcs, insns = disassembly("fw", "planted")
 edges, _ = call_graph(funcs, insns)
 names_of = dict(funcs)
-planted = sorted(short(names_of[x], 60) for x in reachable(edges, entry_of("fw", "planted", r"Planted<.*> as absorber_firmware::Sim>::step$"))
+planted = sorted(short(names_of[x], 60) for x in reachable(edges, entry_of("fw", "planted", r"Planted<.*> as absorber_firmware::sim::Sim>::step$"))
                  if PANIC.search(names_of[x]))
 result = {k: v for k, v in figures.items()}
 result.update(stress)
@@ -864,7 +864,7 @@ w("Functions reachable from the free-ball `step` (profile `fw`): " +
   ", ".join(f"`{short(names[a], 70)}`" for a in sorted(reachable(edges, entry), key=lambda a: names[a])) + ".")
 w("")
 funcs, insns = disassembly("fw", "free-monitor")
-entry = entry_of("fw", "free-monitor", r" absorber_firmware::monitor_record$")
+entry = entry_of("fw", "free-monitor", r" absorber_firmware::monitored::monitor_record$")
 edges, _ = call_graph(funcs, insns)
 names = dict(funcs)
 rreach = reachable(edges, entry)

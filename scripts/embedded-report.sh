@@ -61,7 +61,7 @@ ops=(' absorber_core::system::System<T,S,_,_>::residual_and_jacobian$'
     '::pivot_fallback$'
     ' absorber_core::system::System<T,S,_,_>::residual$'
     ' absorber_core::newton::Workspace<T,_>::solve$')
-step=' as absorber_firmware::Sim>::step$'
+step=' as absorber_firmware::sim::Sim>::step$'
 scenes=(free free-rolling free-flight free-modified free-monitor free-n6 beam locked estimator monitor-loop)
 for profile in fw fw-size; do
     for scene in "${scenes[@]}" empty planted; do
@@ -82,7 +82,7 @@ for profile in fw fw-size; do
         fi
         # The monitor's share of the step, counted on its own -> $stem.record.{counts,prof,qemu}.
         if [ "$scene" = free-monitor ]; then
-            count "$elf" "$stem" "expect=$hash" .record "$(plugin_args "$stem" ' absorber_firmware::monitor_record$')"
+            count "$elf" "$stem" "expect=$hash" .record "$(plugin_args "$stem" ' absorber_firmware::monitored::monitor_record$')"
         fi
         qemu -kernel "$elf" -append "expect=$hash stack" >"$stem.stack"
     done
