@@ -220,17 +220,11 @@ fn run_hashes(steps: usize) -> (u64, u64) {
     (h32, h64)
 }
 
-/// Without a calibration the model is bit for bit the one before the calibration existed: the
-/// hashes were computed with the same function on the core of commit e49c4c1 (before the
-/// calibration) and agreed with this one's. The locked ball's did until the start changed (below).
-/// The free ball's was re-pinned (from 0xf8ea_9802_3f94_8800) when a stop impact stopped restarting
-/// the accelerations from the consistent acceleration (they now go on from before the impulse,
-/// docs/model.md, "Impulse metric"): a change of the stops' law, not of the calibration; and again
-/// (from 0xf67a_d2dc_313b_9009; 20 → 21 stop impacts in the run) when the beam's accelerations at a
-/// stop crossing became the step's ends' interpolated instead of the sub-step's (docs/model.md,
-/// "Stops"); and both (from 0x3016_55fb_37d1_4049 and 0x7de6_41a5_07c3_6ffe) when the start from
-/// rest left out the equilibrium's own acceleration, the static solve's residual (docs/model.md,
-/// "The start from rest"): every state of both runs moves from the first step on.
+/// Without a calibration the model is bit for bit the one without the calibration code: the
+/// pinned hashes are those of the same runs on a core without it, carried forward only through
+/// changes of the model's law, never of the calibration (each re-pinning is in the history of
+/// this test, with the change of law that moved it: the stops' impulse metric, the beam's
+/// accelerations at a stop crossing, the start from rest; docs/model.md).
 #[test]
 fn uncalibrated_run_is_bit_identical_to_before_calibration() {
     assert!(Params::<f64>::default().calibration.is_identity());

@@ -193,9 +193,9 @@ fn violent_steps_converge_in_both_precisions() {
     assert!(m64 < 10.0 && m32 < 10.0, "{m64} {m32}");
 }
 
-/// Modified Newton at h = 5 ms (damping-matched γ = 0.62, locked ball, N = 4, 4.13 Hz): it
-/// used to diverge at 9.2 s (f32) because a stale-matrix correction that did not contract was
-/// taken before the rebuild. It now runs 15 s and stays with full Newton on the same scene. Both
+/// Modified Newton at h = 5 ms (damping-matched γ = 0.62, locked ball, N = 4, 4.13 Hz): a
+/// stale-matrix correction that does not contract must not be taken before the rebuild (taken,
+/// it diverges at 9.2 s in f32). It runs 15 s and stays with full Newton on the same scene. Both
 /// solve every step to the tolerance, so they differ by the Newton residue: per step at most
 /// tol·L (3.65 µm), which the resonance (Q = 1/2ζ ≈ 64 at ζ = 0.78 %) amplifies at most Q
 /// times; and the difference must shrink with the tolerance (f64, 1e-5 → 1e-7), which a
