@@ -1,8 +1,8 @@
 //! The `host-sim` command line: its commands and options (clap). What each command does is in
 //! [`crate::commands`]; the studies they run are their own modules.
 
-use crate::scene::{ExcitationType, Kind, Plot, Precision, Scene, Solver};
 use absorber_core::monitor::DetailCategory;
+use absorber_sim::scene::{ExcitationType, Kind, Plot, Precision, Scene, Solver};
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -274,7 +274,7 @@ impl SceneArgs {
                      it is left out",
                     f.calibration.elements.unwrap_or(0)
                 );
-                f.calibration = crate::scene::CalibrationSection::default();
+                f.calibration = absorber_sim::scene::CalibrationSection::default();
             }
             f.elements = v;
         }
@@ -333,14 +333,14 @@ pub struct EnsembleArgs {
     #[arg(long, default_value_t = 1)]
     pub ensemble: usize,
     /// Seed of the ensemble's perturbations (the same seed gives the same members).
-    #[arg(long, default_value_t = crate::ensemble::DEFAULT_SEED)]
+    #[arg(long, default_value_t = absorber_sim::ensemble::DEFAULT_SEED)]
     pub seed: u64,
 }
 
 impl EnsembleArgs {
     /// The checked ensemble.
-    pub fn ensemble(&self) -> Result<crate::ensemble::Ensemble> {
-        crate::ensemble::Ensemble::new(self.ensemble, self.seed)
+    pub fn ensemble(&self) -> Result<absorber_sim::ensemble::Ensemble> {
+        absorber_sim::ensemble::Ensemble::new(self.ensemble, self.seed)
     }
 }
 
@@ -551,8 +551,8 @@ pub struct IdentifyArgs {
     #[arg(long, default_value = "t")]
     pub time_column: String,
     /// Free decay or ambient response (random decrement first).
-    #[arg(long, value_enum, default_value_t = crate::identify::RecordKind::Decay)]
-    pub record: crate::identify::RecordKind,
+    #[arg(long, value_enum, default_value_t = absorber_sim::identify::RecordKind::Decay)]
+    pub record: absorber_sim::identify::RecordKind,
     /// Frequency band to look for the mode in, `lo,hi` [Hz] (default 0.1 Hz … a quarter of the
     /// sampling rate).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
@@ -607,7 +607,7 @@ pub fn with_negative_numbers(
 /// A command-line tool of this workspace as a process (`host-sim`, and the studies' developer
 /// tool): parses the arguments of `C` (negative numbers as values), runs `run` and turns its
 /// outcome into the exit code its help documents: 0 success; 1 error (one line on stderr);
-/// 2 usage error; 3 completed with failed points ([`PointsFailed`](crate::output::PointsFailed));
+/// 2 usage error; 3 completed with failed points ([`PointsFailed`](absorber_sim::output::PointsFailed));
 /// 101 a panic (a bug, reported on one line).
 pub fn process<C: Parser>(run: impl FnOnce(C) -> Result<()>) -> std::process::ExitCode {
     use std::process::ExitCode;
@@ -642,8 +642,10 @@ pub fn process<C: Parser>(run: impl FnOnce(C) -> Result<()>) -> std::process::Ex
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {
             eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
-            if e.downcast_ref::<crate::output::PointsFailed>().is_some() {
-                ExitCode::from(crate::output::EXIT_POINTS_FAILED)
+            if e.downcast_ref::<absorber_sim::output::PointsFailed>()
+                .is_some()
+            {
+                ExitCode::from(absorber_sim::output::EXIT_POINTS_FAILED)
             } else {
                 ExitCode::FAILURE
             }

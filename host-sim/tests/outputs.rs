@@ -1,7 +1,7 @@
 //! Outputs that cannot tear or lie, bounded runs, refused input, visible failures, measured
 //! excitation, the README's sample output.
 
-use host_sim::excitation::Excitation;
+use absorber_sim::excitation::Excitation;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
@@ -53,7 +53,7 @@ fn partials(d: &Path) -> Vec<PathBuf> {
             p.file_name()
                 .unwrap()
                 .to_string_lossy()
-                .starts_with(host_sim::output::PARTIAL_PREFIX)
+                .starts_with(absorber_sim::output::PARTIAL_PREFIX)
         })
         .collect()
 }
@@ -340,7 +340,7 @@ fn a_poorly_resolved_frequency_is_warned_about() {
 
 #[test]
 fn failed_points_have_no_numbers() {
-    use host_sim::sweep::SweepPoint;
+    use absorber_sim::sweep::SweepPoint;
     let ok = SweepPoint {
         frequency: 4.0,
         tip_amplitude: 0.01,
@@ -361,7 +361,7 @@ fn failed_points_have_no_numbers() {
         tip_amplitude: 0.03,
         ..ok.clone()
     };
-    let csv = host_sim::sweep::csv(&[ok, bad], &[locked.clone(), locked], 20.0);
+    let csv = absorber_sim::sweep::csv(&[ok, bad], &[locked.clone(), locked], 20.0);
     assert!(
         csv.starts_with(
             "# host-sim sweep: every column over the steady window, steady: t ≥ 20 s to the end"
@@ -377,14 +377,14 @@ fn failed_points_have_no_numbers() {
         "4.1,failed,,,,,,,,3.000000e-2,step 7 (t = 0.021 s) failed: the solver did not converge"
     );
     // Every row has as many fields as the header names.
-    let n = host_sim::sweep::csv_columns().len();
+    let n = absorber_sim::sweep::csv_columns().len();
     assert!(rows.iter().all(|r| r.split(',').count() == n), "{csv}");
 }
 
 #[test]
 fn physical_failures_say_what_happened_in_words() {
-    let s = host_sim::scene::Scene::paper();
-    let m = host_sim::scene::physical_failure(
+    let s = absorber_sim::scene::Scene::paper();
+    let m = absorber_sim::scene::physical_failure(
         absorber_core::Error::NoConvergence {
             iterations: 100,
             increment: 0.5,
@@ -395,12 +395,12 @@ fn physical_failures_say_what_happened_in_words() {
         m.contains("did not converge") && m.contains("--step"),
         "{m}"
     );
-    let m = host_sim::scene::physical_failure(absorber_core::Error::Singular, &s);
+    let m = absorber_sim::scene::physical_failure(absorber_core::Error::Singular, &s);
     assert!(
         m.contains("likely cause") && !m.contains("state kept"),
         "{m}"
     );
-    let m = host_sim::scene::physical_failure(absorber_core::Error::NonFiniteState, &s);
+    let m = absorber_sim::scene::physical_failure(absorber_core::Error::NonFiniteState, &s);
     assert!(m.contains("diverged"), "{m}");
     // A magnitude the static solve could not handle is refused before it, by key and range
     // (it used to end in "static equilibrium ... `beam.*`").
@@ -554,8 +554,8 @@ fn a_fatigue_study_with_a_failed_point_marks_it_and_exits_3() {
 
 #[test]
 fn plot_buffers_stay_bounded_on_long_runs() {
-    use host_sim::figures::PlotData;
-    use host_sim::run::{Row, RunStats};
+    use absorber_sim::figures::PlotData;
+    use absorber_sim::run::{Row, RunStats};
     let mut data = PlotData::new(10.0);
     let mut stats = RunStats::new(3e4, 10.0);
     let row0 = Row {
@@ -566,7 +566,7 @@ fn plot_buffers_stay_bounded_on_long_runs() {
         tip_angle: 0.0,
         ball_angle: 0.0,
         ball_rel_angle: 0.0,
-        energies: host_sim::absorber_core::Energies {
+        energies: absorber_sim::absorber_core::Energies {
             beam_strain: 0.0,
             beam_kinetic: 0.0,
             beam_potential: 0.0,
@@ -604,7 +604,7 @@ fn plot_buffers_stay_bounded_on_long_runs() {
         stats.push(&r);
     }
     let (len, buckets, thin) = data.sizes();
-    assert!(len <= host_sim::figures::MAX_FFT, "{len}");
+    assert!(len <= absorber_sim::figures::MAX_FFT, "{len}");
     assert!(buckets <= 10_000 && thin <= 20_000, "{buckets} {thin}");
     // The min/max envelope keeps the single spike that uniform thinning would drop.
     assert!(data.envelope_max(0) > 9.0, "{}", data.envelope_max(0));

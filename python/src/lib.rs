@@ -1,7 +1,7 @@
 //! `absorber._absorber`: the native half of the Python package `absorber`.
 //!
 //! Thin on purpose: every function loads the scene the way the command line does
-//! (`host_sim::scene::Scene::load`, `SceneArgs::apply` for the overrides) and calls the same
+//! (`absorber_sim::scene::Scene::load`, `SceneArgs::apply` for the overrides) and calls the same
 //! library function as the command (`host_sim::commands::run_in_memory`, `static_summary`,
 //! `lowest_frequencies`, `sweep_in_memory`), so Python and the CLI give the same numbers. The
 //! typed, documented API is `absorber/__init__.py`; errors become `absorber.AbsorberError`
@@ -9,9 +9,9 @@
 
 mod fleet;
 
+use absorber_sim::scene::Scene;
 use host_sim::cli::SceneArgs;
 use host_sim::commands;
-use host_sim::scene::Scene;
 use numpy::PyArray1;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -56,12 +56,12 @@ const MAX_SCENE_DEPTH: usize = 8;
 
 /// Runs `f` (a computation of host-sim) on a worker thread while this thread, holding the GIL
 /// between naps of 50 ms, checks Python's signals: Ctrl-C asks the computation to stop
-/// ([`host_sim::interrupt`], read every 500 steps) and raises `KeyboardInterrupt` here once it
+/// ([`absorber_sim::interrupt`], read every 500 steps) and raises `KeyboardInterrupt` here once it
 /// has (within a second), before any result reaches Python. The worker has the stack the
 /// command line's threads have (the full solver's frames are large); a panic in it is an
 /// `AbsorberError`, never an abort.
 fn interruptible<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
-    host_sim::interrupt::reset();
+    absorber_sim::interrupt::reset();
     std::thread::scope(|scope| {
         let worker = std::thread::Builder::new()
             .name("absorber".into())
@@ -73,7 +73,7 @@ fn interruptible<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyRes
             if signal.is_ok() {
                 signal = py.check_signals();
                 if signal.is_err() {
-                    host_sim::interrupt::raise();
+                    absorber_sim::interrupt::raise();
                 }
             }
             py.detach(|| std::thread::sleep(std::time::Duration::from_millis(50)));
@@ -255,7 +255,7 @@ fn run<'py>(
     let ensemble = whole(ensemble, "ensemble", 1)?;
     let s = scene_with(scene, overrides)?;
     let w = warnings(&s);
-    let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
+    let e = absorber_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
     let (rows, summary) = interruptible(py, || {
         if e.is_ensemble() {
             commands::run_ensemble_in_memory(&s, transient, every, e)
@@ -264,7 +264,7 @@ fn run<'py>(
         }
     })?
     .map_err(to_py)?;
-    let names = host_sim::run::csv_columns();
+    let names = absorber_sim::run::csv_columns();
     let mut columns = vec![Vec::with_capacity(rows.len()); names.len()];
     for r in &rows {
         for (c, x) in columns.iter_mut().zip(r.values()) {
@@ -332,7 +332,7 @@ fn sweep(
     let jobs = jobs.map(|n| whole(n, "jobs", 1)).transpose()?;
     let ensemble = whole(ensemble, "ensemble", 1)?;
     let s = scene_with(scene, overrides)?;
-    let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
+    let e = absorber_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
     let text = interruptible(py, || -> anyhow::Result<String> {
         let f = freqs.as_deref();
         let (points, locked) = if e.is_ensemble() {
@@ -358,11 +358,11 @@ fn scene_toml(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -
 #[pymodule]
 fn _absorber(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // Messages name options as this package's keyword arguments (`transient=`, `last=`).
-    host_sim::output::spell_options_for_python();
+    absorber_sim::output::spell_options_for_python();
     m.add("AbsorberError", m.py().get_type::<AbsorberError>())?;
-    m.add("CSV_COLUMNS", host_sim::run::csv_columns())?;
-    m.add("SWEEP_COLUMNS", host_sim::sweep::csv_columns())?;
-    m.add("BUILT_IN_SCENES", host_sim::scene::BUILT_IN.to_vec())?;
+    m.add("CSV_COLUMNS", absorber_sim::run::csv_columns())?;
+    m.add("SWEEP_COLUMNS", absorber_sim::sweep::csv_columns())?;
+    m.add("BUILT_IN_SCENES", absorber_sim::scene::BUILT_IN.to_vec())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(static_summary, m)?)?;
     m.add_function(wrap_pyfunction!(modes, m)?)?;

@@ -2,23 +2,23 @@
 
 use super::{describe, load};
 use crate::cli::{InfoArgs, ModesArgs, TuneArgs};
-use crate::output::{OutputDir, Status};
-use crate::scene::Scene;
-use crate::tune::tune;
+use absorber_sim::output::{OutputDir, Status};
+use absorber_sim::scene::Scene;
+use absorber_sim::tune::tune;
 use anyhow::{bail, Result};
 use serde_json::json;
 
-use crate::tune::ARM_ELEMENTS;
+use absorber_sim::tune::ARM_ELEMENTS;
 
 /// The structure `static` and `modes` describe: the scene's solver at rest, or for a scene with
 /// an `[arm]` the arm itself (full solver, [`ARM_ELEMENTS`] elements, f64), with its
 /// (solver, elements) as printed.
 fn structure(s: &Scene) -> Result<(Box<dyn absorber_full::sim::Simulator>, usize)> {
     let Some(arm) = &s.file.arm else {
-        return Ok((crate::run::build_simulator(s, 0.0)?, s.file.elements));
+        return Ok((absorber_sim::run::build_simulator(s, 0.0)?, s.file.elements));
     };
-    use crate::scene::Kind;
     use absorber_full::{FullSolver, SceneKind};
+    use absorber_sim::scene::Kind;
     let kind = match s.file.kind {
         Kind::Beam => SceneKind::BeamOnly,
         Kind::Tip => SceneKind::TipMass,
@@ -27,7 +27,7 @@ fn structure(s: &Scene) -> Result<(Box<dyn absorber_full::sim::Simulator>, usize
         Kind::FreeNostops => SceneKind::FreeBallNoStops,
     };
     let sim = FullSolver::arm_at_rest(s.params()?, kind, ARM_ELEMENTS, &arm.params()?, 0.0)
-        .map_err(|e| crate::scene::map_core_error(e, s))?;
+        .map_err(|e| absorber_sim::scene::map_core_error(e, s))?;
     Ok((Box::new(sim), ARM_ELEMENTS))
 }
 
@@ -57,7 +57,7 @@ pub fn lowest_frequencies(s: &Scene, count: usize) -> Result<Vec<f64>> {
     let (sim, _) = structure(s)?;
     let f = sim
         .natural_frequencies()
-        .map_err(|e| crate::scene::map_core_error(e, s))?;
+        .map_err(|e| absorber_sim::scene::map_core_error(e, s))?;
     Ok(f.into_iter().take(count).collect())
 }
 
@@ -94,7 +94,7 @@ pub fn modes(a: &ModesArgs) -> Result<()> {
         .collect();
     let numerical: Vec<Option<f64>> = f
         .iter()
-        .map(|x| crate::integrator::numerical_damping(&p.integrator, *x))
+        .map(|x| absorber_sim::integrator::numerical_damping(&p.integrator, *x))
         .collect();
     if a.json {
         println!(
@@ -146,7 +146,7 @@ pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
             );
         }
         // A real arm: the ball this scale would need, and whether it fits in a signal head.
-        let t = crate::tune::arm_track_radius(&s, a.ratio)?;
+        let t = absorber_sim::tune::arm_track_radius(&s, a.ratio)?;
         if a.json {
             println!("{}", serde_json::to_string(&t)?);
         } else {
@@ -166,7 +166,7 @@ pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
                 println!(
                     "NOT BUILDABLE in a signal head: the track needs {:.0} mm of free space, a head offers about {:.0} mm",
                     2e3 * t.track_radius,
-                    1e3 * crate::tune::SIGNAL_HEAD_SPACE
+                    1e3 * absorber_sim::tune::SIGNAL_HEAD_SPACE
                 );
             }
         }

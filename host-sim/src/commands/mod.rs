@@ -1,5 +1,5 @@
 //! What each command does. The options are in [`crate::cli`]; the computations in the library
-//! modules (`run`, `sweep`, `fatigue`, `tune`); every file goes through [`crate::output`].
+//! modules (`run`, `sweep`, `fatigue`, `tune`); every file goes through [`absorber_sim::output`].
 
 mod calibrate;
 mod estimate;
@@ -14,7 +14,7 @@ pub use run::{run_ensemble_in_memory, run_in_memory, step_damping_line, summary_
 pub use sweep::{sweep_ensemble_in_memory, sweep_in_memory};
 
 use crate::cli::{Cli, Command, PaperArgs, SceneArgs};
-use crate::scene::{ExcitationType, Precision, Scene};
+use absorber_sim::scene::{ExcitationType, Precision, Scene};
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::Path;
@@ -107,7 +107,7 @@ fn pool(jobs: Option<usize>, tasks: usize) -> Result<rayon::ThreadPool> {
     let wanted = match jobs {
         Some(0) => anyhow::bail!(
             "invalid value for `{}`: 0 (must be at least 1)",
-            crate::output::option("jobs")
+            absorber_sim::output::option("jobs")
         ),
         Some(j) => j,
         None => cores,
@@ -137,9 +137,9 @@ fn check_excitations(freqs: &[f64], amps: &[f64], h: f64, fkey: &str, akey: &str
     }
     for &f in freqs {
         for &a in amps {
-            crate::scene::check_harmonic(a, f, h, akey, fkey)?;
+            absorber_sim::scene::check_harmonic(a, f, h, akey, fkey)?;
         }
-        if let Some(w) = crate::scene::harmonic_warning(f, h, fkey) {
+        if let Some(w) = absorber_sim::scene::harmonic_warning(f, h, fkey) {
             eprintln!("{w}");
         }
     }

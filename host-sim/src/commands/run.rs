@@ -2,12 +2,12 @@
 
 use super::{describe, load, pool, progress_bar};
 use crate::cli::{PaperArgs, RunArgs};
-use crate::ensemble::Ensemble;
-use crate::excitation::Excitation;
-use crate::figures::{run_plots, PlotData};
-use crate::output::{command_line, with_output, OutputDir, Status};
-use crate::run::{scene_excitation, secs, simulate_with, RunStats, CSV_HEADER};
-use crate::scene::{Kind, Scene};
+use absorber_sim::ensemble::Ensemble;
+use absorber_sim::excitation::Excitation;
+use absorber_sim::figures::{run_plots, PlotData};
+use absorber_sim::output::{command_line, with_output, OutputDir, Status};
+use absorber_sim::run::{scene_excitation, secs, simulate_with, RunStats, CSV_HEADER};
+use absorber_sim::scene::{Kind, Scene};
 use anyhow::{anyhow, bail, Result};
 use indicatif::ProgressBar;
 use serde_json::{json, Value};
@@ -37,7 +37,7 @@ pub(crate) fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
                 secs(end - MIN_STEADY_STEPS as f64 * h)
             );
         }
-        if s.file.excitation.kind == crate::scene::ExcitationType::Harmonic {
+        if s.file.excitation.kind == absorber_sim::scene::ExcitationType::Harmonic {
             let period = 1.0 / s.file.excitation.frequency_or_paper();
             if end - t < period {
                 eprintln!(
@@ -50,17 +50,17 @@ pub(crate) fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
         Ok(t)
     };
     if let Some(t) = cli {
-        return check(t, &crate::output::option("transient"));
+        return check(t, &absorber_sim::output::option("transient"));
     }
     let t = s.file.outputs.transient;
-    let default = crate::scene::OutputsSection::default().transient;
+    let default = absorber_sim::scene::OutputsSection::default().transient;
     if t == default && t > end / 2.0 {
         eprintln!(
             "note: the default transient ({default} s) would leave less than half of the run ({} s); \
              the steady-state figures use its second half (t ≥ {} s); set {} to choose",
             secs(end),
             secs(end / 2.0),
-            crate::output::option("transient")
+            absorber_sim::output::option("transient")
         );
         return Ok(end / 2.0);
     }
@@ -70,20 +70,20 @@ pub(crate) fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
 /// Fewest steps a steady-state window may hold.
 pub const MIN_STEADY_STEPS: usize = 10;
 
-/// The number under `k` (a [`crate::ensemble::Spread`]'s mean in an ensemble's summary).
+/// The number under `k` (a [`absorber_sim::ensemble::Spread`]'s mean in an ensemble's summary).
 fn num(v: &Value, k: &str) -> f64 {
-    v.get(k).map_or(f64::NAN, crate::ensemble::value)
+    v.get(k).map_or(f64::NAN, absorber_sim::ensemble::value)
 }
 
 /// The statistic under `k` scaled by `scale` with `prec` decimals (`mean ± sd (min–max)` in
 /// an ensemble's summary).
 fn stat(v: &Value, k: &str, scale: f64, prec: usize) -> String {
-    crate::ensemble::text(v.get(k).unwrap_or(&Value::Null), scale, prec)
+    absorber_sim::ensemble::text(v.get(k).unwrap_or(&Value::Null), scale, prec)
 }
 
 /// The count under `k` (`mean ± sd (min–max)` in an ensemble's summary).
 fn count(v: &Value, k: &str) -> String {
-    crate::ensemble::count_text(v.get(k).unwrap_or(&Value::Null))
+    absorber_sim::ensemble::count_text(v.get(k).unwrap_or(&Value::Null))
 }
 
 /// A friction ratio: plain below 1000 (`4.73`), else in exponent form (`1.162e4`, where a
@@ -188,7 +188,7 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
             stat(c, "normal_force_min_over_weight", 1.0, 2),
         ));
         }
-        let peak = match crate::ensemble::spread_of(
+        let peak = match absorber_sim::ensemble::spread_of(
             c.get("required_friction_max").unwrap_or(&Value::Null),
         ) {
             Some(p) => format!("{} ({}–{})", ratio(p.mean), ratio(p.min), ratio(p.max)),
@@ -211,7 +211,7 @@ fn stream(
     exc: &Excitation,
     steady_from: f64,
     what: &str,
-    each: impl FnMut(&crate::run::Row) -> Result<()>,
+    each: impl FnMut(&absorber_sim::run::Row) -> Result<()>,
 ) -> Result<Value> {
     let pb = progress_bar(s.steps() as u64, what);
     let r = stream_with(s, exc, steady_from, &pb, each);
@@ -225,7 +225,7 @@ fn stream_with(
     exc: &Excitation,
     steady_from: f64,
     pb: &ProgressBar,
-    mut each: impl FnMut(&crate::run::Row) -> Result<()>,
+    mut each: impl FnMut(&absorber_sim::run::Row) -> Result<()>,
 ) -> Result<Value> {
     let steps = s.steps();
     let p = s.params()?;
@@ -282,9 +282,9 @@ fn other_members(
     (1..e.k)
         .into_par_iter()
         .map(|m| {
-            let member = crate::ensemble::member_scene(s, e.seed, m);
+            let member = absorber_sim::ensemble::member_scene(s, e.seed, m);
             stream_with(&member, exc, steady_from, pb, |_| Ok(())).map_err(|err| {
-                let (a, r) = crate::ensemble::perturbation(e.seed, m);
+                let (a, r) = absorber_sim::ensemble::perturbation(e.seed, m);
                 anyhow!(
                     "ensemble member {m} (initial angle {:+.4}°, rate {r:+.5} rad/s): {err:#}",
                     a
@@ -294,7 +294,7 @@ fn other_members(
         .collect()
 }
 
-/// Member 0's summary and the others', aggregated ([`crate::ensemble::aggregate`]); the plain
+/// Member 0's summary and the others', aggregated ([`absorber_sim::ensemble::aggregate`]); the plain
 /// summary for one member.
 fn ensemble_summary(first: Value, others: Vec<Value>) -> Value {
     if others.is_empty() {
@@ -302,17 +302,17 @@ fn ensemble_summary(first: Value, others: Vec<Value>) -> Value {
     }
     let mut all = vec![first];
     all.extend(others);
-    crate::ensemble::aggregate(&all, &SHARED_KEYS)
+    absorber_sim::ensemble::aggregate(&all, &SHARED_KEYS)
 }
 
 pub fn paper(a: &PaperArgs) -> Result<()> {
     let t0 = Instant::now();
     let s = load(&a.scene)?;
     let from = steady_start(None, &s)?;
-    let sim = crate::run::build_simulator(&s, 0.0)?;
+    let sim = absorber_sim::run::build_simulator(&s, 0.0)?;
     let freqs = sim
         .natural_frequencies()
-        .map_err(|e| crate::scene::map_core_error(e, &s))?;
+        .map_err(|e| absorber_sim::scene::map_core_error(e, &s))?;
     let exc = scene_excitation(&s)?;
     let free = stream(&s, &exc, from, "free ball", |_| Ok(()))?;
     let mut locked = None;
@@ -382,8 +382,8 @@ pub fn physics_line(p: &Scene, summary: &Value) -> String {
         100.0 * f.damping.ratio.unwrap_or(0.0),
         f.elements,
         match f.precision {
-            crate::scene::Precision::F32 => "f32",
-            crate::scene::Precision::F64 => "f64",
+            absorber_sim::scene::Precision::F32 => "f32",
+            absorber_sim::scene::Precision::F64 => "f64",
         },
         f.integrator.step,
         f.duration,
@@ -429,7 +429,7 @@ fn plan(
     if every == 0 {
         bail!(
             "invalid value for `{}`: 0 (must be at least 1)",
-            crate::output::option("every")
+            absorber_sim::output::option("every")
         );
     }
     let steps = s.steps();
@@ -439,7 +439,7 @@ fn plan(
             "invalid value for `{opt}` (or `outputs.every`): {every} writes {rows} CSV rows for {steps} \
              steps; allowed: at most {MAX_CSV_ROWS} rows (use {opt} {} or more)",
             (steps as u64).div_ceil(MAX_CSV_ROWS - 1),
-            opt = crate::output::option("every"),
+            opt = absorber_sim::output::option("every"),
         );
     }
     Ok((exc, from, every))
@@ -452,7 +452,7 @@ pub fn run_in_memory(
     s: &Scene,
     transient: Option<f64>,
     every: Option<usize>,
-) -> Result<(Vec<crate::run::Row>, Value)> {
+) -> Result<(Vec<absorber_sim::run::Row>, Value)> {
     let (exc, from, every) = plan(s, transient, every)?;
     rows_in_memory(s, &exc, from, every)
 }
@@ -464,7 +464,7 @@ fn rows_in_memory(
     exc: &Excitation,
     from: f64,
     every: usize,
-) -> Result<(Vec<crate::run::Row>, Value)> {
+) -> Result<(Vec<absorber_sim::run::Row>, Value)> {
     let mut rows = Vec::new();
     rows.try_reserve(s.steps() / every + 1).map_err(|_| {
         anyhow::anyhow!(
@@ -496,8 +496,8 @@ pub fn run_ensemble_in_memory(
     transient: Option<f64>,
     every: Option<usize>,
     e: Ensemble,
-) -> Result<(Vec<crate::run::Row>, Value)> {
-    crate::ensemble::check_scene(s, e)?;
+) -> Result<(Vec<absorber_sim::run::Row>, Value)> {
+    absorber_sim::ensemble::check_scene(s, e)?;
     let (exc, from, every) = plan(s, transient, every)?;
     let (rows, first) = rows_in_memory(s, &exc, from, every)?;
     let pb = ProgressBar::hidden();
@@ -510,7 +510,7 @@ pub fn run(a: &RunArgs) -> Result<()> {
     let s = load(&a.scene)?;
     let f = &s.file;
     let ens = a.ensemble.ensemble()?;
-    crate::ensemble::check_scene(&s, ens)?;
+    absorber_sim::ensemble::check_scene(&s, ens)?;
     let (exc, from, every) = plan(&s, a.transient, a.every)?;
     let workers = pool(None, ens.k)?;
     let plots = if a.no_plots {
@@ -605,7 +605,7 @@ pub fn ensemble_line(e: Ensemble) -> String {
         "ensemble of {} runs (seed {}; initial ball angle ± {}°, rate ± {} rad/s): mean ± sd (min–max)",
         e.k,
         e.seed,
-        crate::ensemble::ANGLE_SPREAD_DEG,
-        crate::ensemble::RATE_SPREAD
+        absorber_sim::ensemble::ANGLE_SPREAD_DEG,
+        absorber_sim::ensemble::RATE_SPREAD
     )
 }
