@@ -7,6 +7,8 @@
 //! - [`excitation`]: the base excitation, harmonic or a measured record;
 //! - [`run`]: one scene in time, streamed ([`run::Row`], its statistics, CSV rows);
 //! - [`sweep`]: the frequency response, one run per frequency in parallel;
+//! - [`simulate`]: the commands' simulations in memory (`run`, `sweep`, `static`, `modes`), as
+//!   the command line, the Python package and the studies call them;
 //! - [`ensemble`]: K seeded members of a chaotic run and their statistics;
 //! - [`fatigue`]: the clamp's fatigue damage rate vs frequency and amplitude;
 //! - [`tune`]: the track radius for a ball frequency half the beam's;
@@ -22,6 +24,7 @@
 //! - [`csvio`]: the user's CSV files (records, decays, load tables);
 //! - [`output`]: the one writer of every file (atomic, manifest, lock);
 //! - [`interrupt`]: stopping a long computation from outside (Python's Ctrl-C);
+//! - [`process`]: a command-line tool as a process (arguments, exit codes, panics);
 //! - [`core_sim`]: the embedded core behind [`absorber_full::sim::Simulator`] (N picked at
 //!   compile time by the one macro [`with_elements!`]); the full solver is [`absorber_full`].
 pub use absorber_core;
@@ -41,8 +44,10 @@ pub mod interrupt;
 pub mod lm;
 pub mod output;
 pub mod plot;
+pub mod process;
 pub mod run;
 pub mod scene;
+pub mod simulate;
 pub mod sweep;
 pub mod tune;
 pub mod wind;

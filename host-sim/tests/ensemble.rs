@@ -5,8 +5,8 @@
 use absorber_sim::ensemble::{spread_of, Ensemble};
 use absorber_sim::run::{scene_excitation, simulate};
 use absorber_sim::scene::{Scene, Solver};
+use absorber_sim::simulate::{run_ensemble_in_memory, run_in_memory};
 use host_sim::cli::SceneArgs;
-use host_sim::commands::{run_ensemble_in_memory, run_in_memory};
 use std::process::Command;
 
 fn scene(args: SceneArgs) -> Scene {

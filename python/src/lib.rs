@@ -1,17 +1,16 @@
 //! `absorber._absorber`: the native half of the Python package `absorber`.
 //!
 //! Thin on purpose: every function loads the scene the way the command line does
-//! (`absorber_sim::scene::Scene::load`, `SceneArgs::apply` for the overrides) and calls the same
-//! library function as the command (`host_sim::commands::run_in_memory`, `static_summary`,
+//! (`absorber_sim::scene::Scene::load`, `Overrides::apply` for the overrides) and calls the same
+//! library function as the command (`absorber_sim::simulate::run_in_memory`, `static_summary`,
 //! `lowest_frequencies`, `sweep_in_memory`), so Python and the CLI give the same numbers. The
 //! typed, documented API is `absorber/__init__.py`; errors become `absorber.AbsorberError`
 //! (a `ValueError`) with the offending field in its `field` attribute.
 
 mod fleet;
 
-use absorber_sim::scene::Scene;
-use host_sim::cli::SceneArgs;
-use host_sim::commands;
+use absorber_sim::scene::{Overrides, Scene};
+use absorber_sim::simulate;
 use numpy::PyArray1;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -202,15 +201,15 @@ fn number<T: for<'a, 'py> FromPyObject<'a, 'py>>(v: &Bound<'_, PyAny>, key: &str
 /// `frequency`, `amplitude`, `duration`, `step`), validated.
 fn scene_with(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -> PyResult<Scene> {
     let s = load_scene(scene)?;
-    let mut a = SceneArgs::default();
+    let mut a = Overrides::default();
     if let Some(o) = overrides {
         for (k, v) in o.iter() {
             let k: String = k.extract()?;
             match k.as_str() {
-                "solver" => a.model.solver = Some(parse_enum(&v, &k)?),
-                "kind" => a.model.kind = Some(parse_enum(&v, &k)?),
-                "precision" => a.model.precision = Some(parse_enum(&v, &k)?),
-                "elements" => a.model.elements = Some(number(&v, &k)?),
+                "solver" => a.solver = Some(parse_enum(&v, &k)?),
+                "kind" => a.kind = Some(parse_enum(&v, &k)?),
+                "precision" => a.precision = Some(parse_enum(&v, &k)?),
+                "elements" => a.elements = Some(number(&v, &k)?),
                 "frequency" => a.frequency = Some(number(&v, &k)?),
                 "amplitude" => a.amplitude = Some(number(&v, &k)?),
                 "duration" => a.duration = Some(number(&v, &k)?),
@@ -258,9 +257,9 @@ fn run<'py>(
     let e = absorber_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
     let (rows, summary) = interruptible(py, || {
         if e.is_ensemble() {
-            commands::run_ensemble_in_memory(&s, transient, every, e)
+            simulate::run_ensemble_in_memory(&s, transient, every, e)
         } else {
-            commands::run_in_memory(&s, transient, every)
+            simulate::run_in_memory(&s, transient, every)
         }
     })?
     .map_err(to_py)?;
@@ -287,7 +286,7 @@ fn static_summary(
     overrides: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
     let s = scene_with(scene, overrides)?;
-    interruptible(py, || commands::static_summary(&s))?
+    interruptible(py, || simulate::static_summary(&s))?
         .map(|v| v.to_string())
         .map_err(to_py)
 }
@@ -303,7 +302,7 @@ fn modes<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let count = whole(count, "count", 1)?;
     let s = scene_with(scene, overrides)?;
-    let f = interruptible(py, || commands::lowest_frequencies(&s, count))?.map_err(to_py)?;
+    let f = interruptible(py, || simulate::lowest_frequencies(&s, count))?.map_err(to_py)?;
     Ok(PyArray1::from_vec(py, f))
 }
 
@@ -336,10 +335,10 @@ fn sweep(
     let text = interruptible(py, || -> anyhow::Result<String> {
         let f = freqs.as_deref();
         let (points, locked) = if e.is_ensemble() {
-            let (p, l) = commands::sweep_ensemble_in_memory(&s, f, last, jobs, e)?;
+            let (p, l) = simulate::sweep_ensemble_in_memory(&s, f, last, jobs, e)?;
             (serde_json::to_value(p)?, l)
         } else {
-            let (p, l) = commands::sweep_in_memory(&s, f, last, jobs)?;
+            let (p, l) = simulate::sweep_in_memory(&s, f, last, jobs)?;
             (serde_json::to_value(p)?, l)
         };
         Ok(serde_json::json!({ "points": points, "locked": locked }).to_string())

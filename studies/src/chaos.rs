@@ -283,7 +283,7 @@ pub fn run(a: &ChaosArgs) -> Result<()> {
         jobs.par_iter()
             .map(|(f, c, h, m, s)| {
                 let t = std::time::Instant::now();
-                let r = host_sim::commands::summary_in_memory(s, Some(a.transient));
+                let r = absorber_sim::simulate::summary_in_memory(s, Some(a.transient));
                 let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 eprintln!(
                     "chaos: {n}/{total} ({f} Hz, {}, h = {h} s, member {m}){}",

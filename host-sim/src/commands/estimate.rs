@@ -49,7 +49,7 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
                 bail!("invalid value for `--frequency`: {f} (must be finite and positive)");
             }
             // The Nyquist limit and the resolution warning, as `run` has them.
-            super::check_excitations(&[f], &[], h, "--frequency", "")?;
+            absorber_sim::simulate::check_excitations(&[f], &[], h, "--frequency", "")?;
             absorber_sim::scene::check_harmonic(0.0, f, h, "", "--frequency")?;
             scene.file.excitation.frequency = Some(f);
         }

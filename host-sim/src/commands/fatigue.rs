@@ -1,6 +1,6 @@
 //! `fatigue`: damage rate at the clamp vs frequency, free vs locked ball.
 
-use super::{check_excitations, load, pool};
+use super::load;
 use crate::cli::{FatigueArgs, Moment};
 use absorber_core::monitor::{MomentEstimate, MonitorConfig, ThresholdRule};
 use absorber_sim::ensemble::Ensemble;
@@ -10,6 +10,7 @@ use absorber_sim::fatigue::{
 };
 use absorber_sim::output::{command_line, with_output, OutputDir, PointsFailed, Status};
 use absorber_sim::plot::{render, Panel, Series};
+use absorber_sim::simulate::{check_excitations, pool};
 use absorber_sim::sweep::PAPER_FREQUENCIES;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -55,7 +56,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             );
         }
     }
-    let steady_from = super::run::steady_start(None, &s)?;
+    let steady_from = absorber_sim::simulate::time::steady_start(None, &s)?;
     let window = format!("steady: t ≥ {steady_from} s to the end");
     let ens = a.ensemble.ensemble()?;
     if ens.is_ensemble() && a.calibrate_against.is_some() {

@@ -4,32 +4,12 @@ use super::{describe, load};
 use crate::cli::{InfoArgs, ModesArgs, TuneArgs};
 use absorber_sim::output::{OutputDir, Status};
 use absorber_sim::scene::Scene;
+use absorber_sim::simulate::linear::{lowest_frequencies, static_summary, structure};
 use absorber_sim::tune::tune;
 use anyhow::{bail, Result};
 use serde_json::json;
 
 use absorber_sim::tune::ARM_ELEMENTS;
-
-/// The structure `static` and `modes` describe: the scene's solver at rest, or for a scene with
-/// an `[arm]` the arm itself (full solver, [`ARM_ELEMENTS`] elements, f64), with its
-/// (solver, elements) as printed.
-fn structure(s: &Scene) -> Result<(Box<dyn absorber_full::sim::Simulator>, usize)> {
-    let Some(arm) = &s.file.arm else {
-        return Ok((absorber_sim::run::build_simulator(s, 0.0)?, s.file.elements));
-    };
-    use absorber_full::{FullSolver, SceneKind};
-    use absorber_sim::scene::Kind;
-    let kind = match s.file.kind {
-        Kind::Beam => SceneKind::BeamOnly,
-        Kind::Tip => SceneKind::TipMass,
-        Kind::Locked => SceneKind::LockedBall,
-        Kind::Free => SceneKind::FreeBall,
-        Kind::FreeNostops => SceneKind::FreeBallNoStops,
-    };
-    let sim = FullSolver::arm_at_rest(s.params()?, kind, ARM_ELEMENTS, &arm.params()?, 0.0)
-        .map_err(|e| absorber_sim::scene::map_core_error(e, s))?;
-    Ok((Box::new(sim), ARM_ELEMENTS))
-}
 
 /// The line that says which structure an arm scene's figures describe.
 fn arm_note(s: &Scene) -> Option<String> {
@@ -38,27 +18,6 @@ fn arm_note(s: &Scene) -> Option<String> {
             "structure                  the [arm]: tapered tube with its heads, full solver, {ARM_ELEMENTS} elements, f64 (as `tune`)"
         )
     })
-}
-
-/// What `static --json` prints: scene, kind, elements, solver and the static tip deflection \[m\]
-/// (for a scene with an `[arm]`: of the arm, full solver, [`ARM_ELEMENTS`] elements).
-pub fn static_summary(s: &Scene) -> Result<serde_json::Value> {
-    let (sim, elements) = structure(s)?;
-    let d = sim.static_tip_deflection();
-    Ok(
-        json!({ "scene": s.file.name, "kind": s.file.kind.name(), "arm": s.file.arm.is_some(), "elements": elements, "solver": sim.solver_name(), "static_tip_deflection": d }),
-    )
-}
-
-/// The `count` lowest natural frequencies of the linearized model at the static equilibrium \[Hz\]
-/// (what `modes` prints; for a scene with an `[arm]`: of the arm, full solver,
-/// [`ARM_ELEMENTS`] elements).
-pub fn lowest_frequencies(s: &Scene, count: usize) -> Result<Vec<f64>> {
-    let (sim, _) = structure(s)?;
-    let f = sim
-        .natural_frequencies()
-        .map_err(|e| absorber_sim::scene::map_core_error(e, s))?;
-    Ok(f.into_iter().take(count).collect())
 }
 
 pub fn static_cmd(a: &InfoArgs) -> Result<()> {

@@ -1,124 +1,17 @@
 //! `sweep`: the frequency response, one streamed run per frequency in parallel.
 
-use super::{check_excitations, describe, load, pool, progress_bar};
+use super::{describe, load};
 use crate::cli::SweepArgs;
 use absorber_sim::ensemble::{spread_of, Ensemble};
 use absorber_sim::output::{command_line, with_output, OutputDir, PointsFailed, Status};
 use absorber_sim::plot::{render, Panel, Series};
 use absorber_sim::scene::Scene;
-use absorber_sim::sweep::{aggregate_point, sweep, sweep_members, SweepPoint, PAPER_FREQUENCIES};
-use anyhow::{bail, Result};
+use absorber_sim::simulate::response::{check, locked_points, locked_scene, window};
+use absorber_sim::simulate::{pool, progress_bar};
+use absorber_sim::sweep::{aggregate_point, sweep, sweep_members, SweepPoint};
+use anyhow::Result;
 use serde_json::{json, Value};
 use std::time::Instant;
-
-/// The steady window's start \[s\]: `last` seconds before the end of each run, or (`None`) the
-/// start `run` and `paper` use ([`super::run::steady_start`]: `outputs.transient`, or the run's
-/// second half when the default 20 s would leave less; [`absorber_sim::run::steady_label`]).
-pub fn window(s: &Scene, last: Option<f64>) -> Result<f64> {
-    match last {
-        Some(l) => Ok(s.steps() as f64 * s.file.integrator.step - l),
-        None => super::run::steady_start(None, s),
-    }
-}
-
-/// What `sweep` checks before it computes: a harmonic scene, the frequencies (default: the
-/// paper's) against the step, and the window `last`; returns the frequencies.
-fn check(s: &Scene, freqs: Option<&[f64]>, from: f64) -> Result<Vec<f64>> {
-    let freqs = freqs.map_or_else(|| PAPER_FREQUENCIES.to_vec(), <[f64]>::to_vec);
-    if s.file.excitation.kind != absorber_sim::scene::ExcitationType::Harmonic {
-        bail!("sweep needs a harmonic excitation (the scene has type = \"csv\")");
-    }
-    let h = s.file.integrator.step;
-    check_excitations(
-        &freqs,
-        &[s.file.excitation.amplitude_or_paper()],
-        h,
-        &absorber_sim::output::option("freqs"),
-        &absorber_sim::output::option("amplitude"),
-    )?;
-    let duration = s.steps() as f64 * h;
-    let last = duration - from;
-    if !last.is_finite() || last < 10.0 * h || last >= duration {
-        bail!(
-            "invalid value for `{opt}`: {last} (the steady-state window must hold at least 10 steps, \
-             {} s, and be shorter than the run, {duration} s; without `{opt}` it is the run after \
-             `outputs.transient` = {} s)",
-            10.0 * h,
-            s.file.outputs.transient,
-            opt = absorber_sim::output::option("last"),
-        );
-    }
-    Ok(freqs)
-}
-
-/// The scene with its ball locked (the passive absorber `sweep` compares with), for a scene
-/// whose ball is free; `None` otherwise.
-pub fn locked_scene(s: &Scene) -> Option<Scene> {
-    s.file.kind.free_ball().then(|| {
-        let mut l = s.clone();
-        l.file.kind = absorber_sim::scene::Kind::Locked;
-        l
-    })
-}
-
-/// The locked ball's points at `freqs` (none without a free ball), on the current pool.
-fn locked_points(
-    locked: Option<&Scene>,
-    freqs: &[f64],
-    from: f64,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<SweepPoint>> {
-    match locked {
-        Some(l) => sweep(l, freqs, from, progress),
-        None => Ok(Vec::new()),
-    }
-}
-
-/// `sweep` in memory (the Python package's `sweep`): the same checks and the same parallel runs
-/// on `jobs` threads (default and at most: the cores and the frequencies), one point per
-/// frequency (failed points carry their error), and the locked ball's points as the command
-/// prints them (empty without a free ball).
-pub fn sweep_in_memory(
-    s: &Scene,
-    freqs: Option<&[f64]>,
-    last: Option<f64>,
-    jobs: Option<usize>,
-) -> Result<(Vec<SweepPoint>, Vec<SweepPoint>)> {
-    let from = window(s, last)?;
-    let freqs = check(s, freqs, from)?;
-    let pool = pool(jobs, freqs.len())?;
-    let locked = locked_scene(s);
-    pool.install(|| {
-        Ok((
-            sweep(s, &freqs, from, &|_| {})?,
-            locked_points(locked.as_ref(), &freqs, from, &|_| {})?,
-        ))
-    })
-}
-
-/// An ensemble's sweep in memory (the Python package's `sweep(..., ensemble=K)`): per frequency
-/// the aggregated point ([`absorber_sim::sweep::aggregate_point`]), and the locked ball's points (one
-/// run per frequency: a locked ball has no initial angle to perturb; empty without a free
-/// ball).
-pub fn sweep_ensemble_in_memory(
-    s: &Scene,
-    freqs: Option<&[f64]>,
-    last: Option<f64>,
-    jobs: Option<usize>,
-    e: Ensemble,
-) -> Result<(Vec<Value>, Vec<SweepPoint>)> {
-    let from = window(s, last)?;
-    let freqs = check(s, freqs, from)?;
-    let pool = pool(jobs, freqs.len() * e.k)?;
-    let l = locked_scene(s);
-    let (members, locked) = pool.install(|| -> Result<_> {
-        Ok((
-            sweep_members(s, &freqs, from, e, &|_| {})?,
-            locked_points(l.as_ref(), &freqs, from, &|_| {})?,
-        ))
-    })?;
-    Ok((members.iter().map(|m| aggregate_point(m)).collect(), locked))
-}
 
 pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
     let s = load(&a.scene)?;
