@@ -1,10 +1,10 @@
 //! Host time of one frequency-response sweep on the embedded core: the paper's 14 frequencies
-//! (3.50–4.70 Hz) × 10 s each, free ball, N = 3, `f32`, h = 3 ms (`host_sim::sweep::sweep`,
+//! (3.50–4.70 Hz) × 10 s each, free ball, N = 3, `f32`, h = 3 ms (`absorber_sim::sweep::sweep`,
 //! parallel over the frequencies with rayon; the machine's cores are shared).
 
+use absorber_sim::scene::Scene;
+use absorber_sim::sweep::{sweep, PAPER_FREQUENCIES};
 use criterion::{criterion_group, criterion_main, Criterion};
-use host_sim::scene::Scene;
-use host_sim::sweep::{sweep, PAPER_FREQUENCIES};
 use std::hint::black_box;
 
 fn sweep_bench(c: &mut Criterion) {

@@ -124,7 +124,7 @@ fn full_solver_zero_loads_are_bit_identical() {
 /// 0.1–0.45 %).
 #[test]
 fn mast_arm_scene_has_a_measured_first_frequency_and_damping() {
-    let s = absorber::host_sim::scene::Scene::load(concat!(
+    let s = absorber::absorber_sim::scene::Scene::load(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/scenes/mast-arm.toml"
     ))

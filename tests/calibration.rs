@@ -6,9 +6,9 @@
 use absorber_core::{Calibration, FreeBallModel, LockedBall, LockedBallModel, Model, Params};
 use absorber_full::sim::Simulator;
 use absorber_full::{FullSolver, SceneKind};
-use host_sim::calibrate::{fit, reference};
-use host_sim::identify::{identify, Record, RecordKind};
-use host_sim::scene::{Kind, Scene};
+use absorber_sim::calibrate::{fit, reference};
+use absorber_sim::identify::{identify, Record, RecordKind};
+use absorber_sim::scene::{Kind, Scene};
 
 fn locked_scene() -> Scene {
     let mut s = Scene::paper();

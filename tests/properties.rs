@@ -210,7 +210,7 @@ fn random_parameters_and_inputs_are_safe_and_bounded() {
             |(pp, accel, single)| {
                 let p = params(&pp);
                 if single {
-                    let p32 = host_sim::core_sim::params_f32(&p);
+                    let p32 = absorber_sim::core_sim::params_f32(&p);
                     match Model::at_rest(p32, accel[0] as f32) {
                         Ok(m) => {
                             failed_steps.set(failed_steps.get() + check_run::<f32>(m, &accel[1..])?)
@@ -377,7 +377,7 @@ fn arbitrary_scene_text_never_panics() {
     runner(300)
         .run(&(keys, values), |(k, v)| {
             let text = format!("{k}{v}\n");
-            if let Err(e) = host_sim::scene::Scene::from_toml(&text) {
+            if let Err(e) = absorber_sim::scene::Scene::from_toml(&text) {
                 let msg = format!("{e:#}");
                 prop_assert!(!msg.contains('\n'), "multi-line error for `{text}`: {msg}");
             }
@@ -387,7 +387,7 @@ fn arbitrary_scene_text_never_panics() {
     runner(300)
         .run(&proptest::collection::vec(any::<u8>(), 0..200), |bytes| {
             let text = String::from_utf8_lossy(&bytes);
-            let _ = host_sim::scene::Scene::from_toml(&text);
+            let _ = absorber_sim::scene::Scene::from_toml(&text);
             Ok(())
         })
         .unwrap();

@@ -18,7 +18,7 @@ use absorber_core::scalar::{lit, to_f64};
 use absorber_core::{Damping, LockedBall, Model, Params};
 use absorber_full::sim::Simulator;
 use absorber_full::{FullSolver, SceneKind};
-use host_sim::core_sim::params_f32;
+use absorber_sim::core_sim::params_f32;
 
 const H: f64 = 0.003;
 const H_REF: f64 = 0.0005;

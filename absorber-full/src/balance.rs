@@ -81,8 +81,8 @@ mod tests {
 
     /// The shipped mast arm's parameters and arm (N = 3).
     fn mast_arm() -> (Params<f64>, ArmParams<f64>) {
-        let sc =
-            host_sim::scene::Scene::from_toml(include_str!("../../scenes/mast-arm.toml")).unwrap();
+        let sc = absorber_sim::scene::Scene::from_toml(include_str!("../../scenes/mast-arm.toml"))
+            .unwrap();
         let arm = sc.file.arm.as_ref().unwrap().params().unwrap();
         (sc.params().unwrap(), arm)
     }

@@ -3,7 +3,7 @@
 //! a parsed record has a finite positive step and finite samples; a fit marked usable has a
 //! finite f₁ inside the band asked for and a finite ζ ≥ 0.
 #![no_main]
-use host_sim::identify::{identify, parse_csv, RecordKind, Verdict};
+use absorber_sim::identify::{identify, parse_csv, RecordKind, Verdict};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|bytes: &[u8]| {

@@ -6,7 +6,7 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|bytes: &[u8]| {
     let text = String::from_utf8_lossy(bytes);
-    match host_sim::scene::Scene::from_toml(&text) {
+    match absorber_sim::scene::Scene::from_toml(&text) {
         Ok(scene) => {
             let p = scene.params().expect("a validated scene has parameters");
             let _ = scene.to_toml();
@@ -15,8 +15,8 @@ fuzz_target!(|bytes: &[u8]| {
                 let ap = arm.params().expect("a validated arm has parameters");
                 assert!(ap.validate(&p.beam).is_ok());
                 if !f.loads.is_empty() {
-                    let taper = host_sim::scene::taper_of(arm, f.beam.length);
-                    let loads = host_sim::wind::LoadModel::new(&f.loads, taper, &scene.base_dir)
+                    let taper = absorber_sim::scene::taper_of(arm, f.beam.length);
+                    let loads = absorber_sim::wind::LoadModel::new(&f.loads, taper, &scene.base_dir)
                         .expect("validated loads build");
                     for t in [0.0, f.integrator.step, 0.5 * f.duration] {
                         let (tip, line) = loads.sample(t, f.elements);

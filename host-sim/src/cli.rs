@@ -1,8 +1,8 @@
 //! The `host-sim` command line: its commands and options (clap). What each command does is in
 //! [`crate::commands`]; the studies they run are their own modules.
 
-use crate::scene::{ExcitationType, Kind, Plot, Precision, Scene, Solver};
 use absorber_core::monitor::DetailCategory;
+use absorber_sim::scene::{Kind, Overrides, Plot, Precision, Scene, Solver};
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -257,46 +257,23 @@ impl SceneArgs {
     }
 
     /// Applies the overrides to a loaded scene (`self.model.scene` is not read) and validates it
-    /// (the Python package applies its keyword overrides through this).
-    pub fn apply(&self, mut s: Scene) -> Result<Scene> {
-        let f = &mut s.file;
-        if let Some(v) = self.model.solver {
-            f.solver = v;
+    /// ([`Overrides::apply`]).
+    pub fn apply(&self, s: Scene) -> Result<Scene> {
+        self.overrides().apply(s)
+    }
+
+    /// The overrides of these options.
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            solver: self.model.solver,
+            kind: self.model.kind,
+            elements: self.model.elements,
+            precision: self.model.precision,
+            frequency: self.frequency,
+            amplitude: self.amplitude,
+            duration: self.duration,
+            step: self.step,
         }
-        if let Some(v) = self.model.kind {
-            f.kind = v;
-        }
-        if let Some(v) = self.model.elements {
-            if f.calibration.elements.is_some_and(|n| n != v) {
-                // Calibration factors hold for the mesh they were fitted for only.
-                eprintln!(
-                    "note: the scene's [calibration] was fitted for {} elements; with --elements {v} \
-                     it is left out",
-                    f.calibration.elements.unwrap_or(0)
-                );
-                f.calibration = crate::scene::CalibrationSection::default();
-            }
-            f.elements = v;
-        }
-        if let Some(v) = self.model.precision {
-            f.precision = v;
-        }
-        if self.frequency.is_some() || self.amplitude.is_some() {
-            if f.excitation.kind != ExcitationType::Harmonic {
-                f.excitation.kind = ExcitationType::Harmonic;
-                f.excitation.file = None;
-            }
-            f.excitation.frequency = self.frequency.or(f.excitation.frequency);
-            f.excitation.amplitude = self.amplitude.or(f.excitation.amplitude);
-        }
-        if let Some(v) = self.duration {
-            f.duration = v;
-        }
-        if let Some(v) = self.step {
-            f.integrator.step = v;
-        }
-        s.validate()?;
-        Ok(s)
     }
 }
 
@@ -333,14 +310,14 @@ pub struct EnsembleArgs {
     #[arg(long, default_value_t = 1)]
     pub ensemble: usize,
     /// Seed of the ensemble's perturbations (the same seed gives the same members).
-    #[arg(long, default_value_t = crate::ensemble::DEFAULT_SEED)]
+    #[arg(long, default_value_t = absorber_sim::ensemble::DEFAULT_SEED)]
     pub seed: u64,
 }
 
 impl EnsembleArgs {
     /// The checked ensemble.
-    pub fn ensemble(&self) -> Result<crate::ensemble::Ensemble> {
-        crate::ensemble::Ensemble::new(self.ensemble, self.seed)
+    pub fn ensemble(&self) -> Result<absorber_sim::ensemble::Ensemble> {
+        absorber_sim::ensemble::Ensemble::new(self.ensemble, self.seed)
     }
 }
 
@@ -551,8 +528,8 @@ pub struct IdentifyArgs {
     #[arg(long, default_value = "t")]
     pub time_column: String,
     /// Free decay or ambient response (random decrement first).
-    #[arg(long, value_enum, default_value_t = crate::identify::RecordKind::Decay)]
-    pub record: crate::identify::RecordKind,
+    #[arg(long, value_enum, default_value_t = absorber_sim::identify::RecordKind::Decay)]
+    pub record: absorber_sim::identify::RecordKind,
     /// Frequency band to look for the mode in, `lo,hi` [Hz] (default 0.1 Hz … a quarter of the
     /// sampling rate).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
@@ -563,118 +540,4 @@ pub struct IdentifyArgs {
     /// Machine-readable output (JSON on stdout).
     #[arg(long)]
     pub json: bool,
-}
-
-/// The command line with every `--option <negative number>` written `--option=<negative
-/// number>`, so that a negative value in any notation reaches the option's own check (which
-/// names the allowed range): clap takes `-1e-3` or `-1,4` for a short flag otherwise and reports
-/// an "unexpected argument".
-pub fn with_negative_numbers(
-    args: impl IntoIterator<Item = std::ffi::OsString>,
-) -> Vec<std::ffi::OsString> {
-    let negative = |a: &str| {
-        let rest = a.strip_prefix('-').unwrap_or("");
-        rest.starts_with(|c: char| c.is_ascii_digit() || c == '.')
-            && rest
-                .chars()
-                .all(|c| c.is_ascii_digit() || ".eE+-,".contains(c))
-            || ["inf", "infinity", "nan"].contains(&rest.to_ascii_lowercase().as_str())
-    };
-    let mut out: Vec<std::ffi::OsString> = Vec::new();
-    for a in args {
-        let joined = match (out.last().and_then(|p| p.to_str()), a.to_str()) {
-            (Some(prev), Some(v))
-                if prev.starts_with("--")
-                    && !prev.contains('=')
-                    && prev.len() > 2
-                    && negative(v) =>
-            {
-                Some(format!("{prev}={v}"))
-            }
-            _ => None,
-        };
-        match joined {
-            Some(j) => {
-                out.pop();
-                out.push(j.into());
-            }
-            None => out.push(a),
-        }
-    }
-    out
-}
-
-/// A command-line tool of this workspace as a process (`host-sim`, and the studies' developer
-/// tool): parses the arguments of `C` (negative numbers as values), runs `run` and turns its
-/// outcome into the exit code its help documents: 0 success; 1 error (one line on stderr);
-/// 2 usage error; 3 completed with failed points ([`PointsFailed`](crate::output::PointsFailed));
-/// 101 a panic (a bug, reported on one line).
-pub fn process<C: Parser>(run: impl FnOnce(C) -> Result<()>) -> std::process::ExitCode {
-    use std::process::ExitCode;
-    // A file-size limit (`ulimit -f`) kills a process with SIGXFSZ by default, with no word;
-    // ignored, the write fails with EFBIG and the output layer names the file and keeps the
-    // previous result, as for a full disk.
-    #[cfg(unix)]
-    // SAFETY: setting a signal's disposition to SIG_IGN at startup, before any thread exists.
-    unsafe {
-        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
-    }
-    // Safety net: a panic would be a bug; report it on one line, without a backtrace.
-    std::panic::set_hook(Box::new(|info| {
-        let msg = info
-            .payload()
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| info.payload().downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown".into());
-        let at = info
-            .location()
-            .map(|l| format!(" at {}:{}", l.file(), l.line()))
-            .unwrap_or_default();
-        eprintln!("error: internal error (panic{at}): {msg}");
-    }));
-    let cli = match C::try_parse_from(with_negative_numbers(std::env::args_os())) {
-        Ok(cli) => cli,
-        Err(e) => return usage_error::<C>(e),
-    };
-    // The process ends after a panic: nothing observes state it may have left half-updated.
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli))) {
-        Ok(Ok(())) => ExitCode::SUCCESS,
-        Ok(Err(e)) => {
-            eprintln!("error: {}", format!("{e:#}").replace('\n', " "));
-            if e.downcast_ref::<crate::output::PointsFailed>().is_some() {
-                ExitCode::from(crate::output::EXIT_POINTS_FAILED)
-            } else {
-                ExitCode::FAILURE
-            }
-        }
-        Err(_) => ExitCode::from(101),
-    }
-}
-
-/// Reports a command line clap refused and returns its exit code (2; 0 for `--help` and
-/// `--version`). An unknown command is named with the commands there are.
-pub fn usage_error<C: clap::CommandFactory>(e: clap::Error) -> std::process::ExitCode {
-    use clap::error::{ContextKind, ContextValue, ErrorKind};
-    if e.kind() == ErrorKind::InvalidSubcommand {
-        let given = match e.get(ContextKind::InvalidSubcommand) {
-            Some(ContextValue::String(s)) => s.clone(),
-            _ => String::new(),
-        };
-        let command = C::command();
-        let commands: Vec<String> = command
-            .get_subcommands()
-            .map(|c| c.get_name().to_string())
-            .collect();
-        eprintln!(
-            "error: unknown command `{given}` (allowed: {}; `{} --help` says what each does)",
-            commands.join(", "),
-            command.get_name()
-        );
-        return std::process::ExitCode::from(2);
-    }
-    let code = e.exit_code();
-    // clap prints help and errors itself (with colour on a terminal).
-    let _ = e.print();
-    std::process::ExitCode::from(u8::try_from(code).unwrap_or(2))
 }

@@ -1,5 +1,5 @@
 //! `host-sim`: the command-line tool (see `host-sim --help`).
 
 fn main() -> std::process::ExitCode {
-    host_sim::cli::process(host_sim::commands::dispatch)
+    absorber_sim::process::process(host_sim::commands::dispatch)
 }

@@ -4,8 +4,8 @@
 
 use absorber_core::{Error, Params};
 use absorber_full::{FullSolver, SceneKind};
-use host_sim::excitation::Excitation;
-use host_sim::scene::Scene;
+use absorber_sim::excitation::Excitation;
+use absorber_sim::scene::Scene;
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -176,7 +176,7 @@ fn inconsistent_scene_values_are_named() {
             }
             Ok(scene) => {
                 // Some checks happen when the solver is built.
-                let e = host_sim::run::build_simulator(&scene, 0.0)
+                let e = absorber_sim::run::build_simulator(&scene, 0.0)
                     .err()
                     .map(|e| format!("{e:#}"))
                     .unwrap_or_else(|| panic!("`{text}` accepted"));

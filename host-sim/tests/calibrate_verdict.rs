@@ -1,8 +1,8 @@
 //! `calibrate` prints its fit residual beside the expected range and a grade (ok / poor /
 //! FAILED, as `identify` grades its figures), in the table, the JSON and the written scene.
 
-use host_sim::calibrate::{residual_quality, MAX_RESIDUAL, MAX_RESIDUAL_AT_CAP, OK_RESIDUAL};
-use host_sim::identify::Grade;
+use absorber_sim::calibrate::{residual_quality, MAX_RESIDUAL, MAX_RESIDUAL_AT_CAP, OK_RESIDUAL};
+use absorber_sim::identify::Grade;
 use std::process::Command;
 
 /// The grade's edges: a 2-element model reaches 6.5e-4 against a converged reference (ok), a

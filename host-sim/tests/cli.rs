@@ -1,8 +1,8 @@
 //! The command-line tool: scene parsing, CSV excitation, exit codes, run output, FFT, tuning.
 
-use host_sim::excitation::Excitation;
-use host_sim::fft::spectrum;
-use host_sim::scene::Scene;
+use absorber_sim::excitation::Excitation;
+use absorber_sim::fft::spectrum;
+use absorber_sim::scene::Scene;
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -145,9 +145,9 @@ fn fft_peak_of_a_sine() {
 
 #[test]
 fn tune_puts_the_ball_at_half_the_beam_frequency() {
-    let t = host_sim::tune::tune(&Scene::paper(), 0.5).unwrap();
+    let t = absorber_sim::tune::tune(&Scene::paper(), 0.5).unwrap();
     let (ball, beam) =
-        host_sim::tune::coupled_frequencies(&Scene::paper(), t.track_radius).unwrap();
+        absorber_sim::tune::coupled_frequencies(&Scene::paper(), t.track_radius).unwrap();
     assert!((ball / beam - 0.5).abs() < 0.5e-3, "ratio {}", ball / beam);
     assert!(
         t.track_radius > 0.0395,
@@ -157,7 +157,7 @@ fn tune_puts_the_ball_at_half_the_beam_frequency() {
     let shipped =
         Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/tuned.toml")).unwrap();
     let r = shipped.file.ball.track_radius;
-    let (ball, beam) = host_sim::tune::coupled_frequencies(&shipped, r).unwrap();
+    let (ball, beam) = absorber_sim::tune::coupled_frequencies(&shipped, r).unwrap();
     assert!(
         (ball / beam - 0.5).abs() < 0.5e-3,
         "shipped tuned.toml: ratio {}",

@@ -1,12 +1,12 @@
-//! Ensembles of the chaotic free ball (`host_sim::ensemble`): seeded and reproducible, one
+//! Ensembles of the chaotic free ball (`absorber_sim::ensemble`): seeded and reproducible, one
 //! member is the plain run byte for byte; and the rows of event steps tell the truth about the
 //! track.
 
+use absorber_sim::ensemble::{spread_of, Ensemble};
+use absorber_sim::run::{scene_excitation, simulate};
+use absorber_sim::scene::{Scene, Solver};
+use absorber_sim::simulate::{run_ensemble_in_memory, run_in_memory};
 use host_sim::cli::SceneArgs;
-use host_sim::commands::{run_ensemble_in_memory, run_in_memory};
-use host_sim::ensemble::{spread_of, Ensemble};
-use host_sim::run::{scene_excitation, simulate};
-use host_sim::scene::{Scene, Solver};
 use std::process::Command;
 
 fn scene(args: SceneArgs) -> Scene {

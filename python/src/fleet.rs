@@ -3,8 +3,8 @@
 //! released while the record runs, so threads of one process run records in parallel too.
 
 use crate::{error, interruptible, load_scene, to_py};
-use host_sim::fleet::{self, Absorber};
-use host_sim::scene::Scene;
+use absorber_sim::fleet::{self, Absorber};
+use absorber_sim::scene::Scene;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyString;

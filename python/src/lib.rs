@@ -1,17 +1,16 @@
 //! `absorber._absorber`: the native half of the Python package `absorber`.
 //!
 //! Thin on purpose: every function loads the scene the way the command line does
-//! (`host_sim::scene::Scene::load`, `SceneArgs::apply` for the overrides) and calls the same
-//! library function as the command (`host_sim::commands::run_in_memory`, `static_summary`,
+//! (`absorber_sim::scene::Scene::load`, `Overrides::apply` for the overrides) and calls the same
+//! library function as the command (`absorber_sim::simulate::run_in_memory`, `static_summary`,
 //! `lowest_frequencies`, `sweep_in_memory`), so Python and the CLI give the same numbers. The
 //! typed, documented API is `absorber/__init__.py`; errors become `absorber.AbsorberError`
 //! (a `ValueError`) with the offending field in its `field` attribute.
 
 mod fleet;
 
-use host_sim::cli::SceneArgs;
-use host_sim::commands;
-use host_sim::scene::Scene;
+use absorber_sim::scene::{Overrides, Scene};
+use absorber_sim::simulate;
 use numpy::PyArray1;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -56,12 +55,12 @@ const MAX_SCENE_DEPTH: usize = 8;
 
 /// Runs `f` (a computation of host-sim) on a worker thread while this thread, holding the GIL
 /// between naps of 50 ms, checks Python's signals: Ctrl-C asks the computation to stop
-/// ([`host_sim::interrupt`], read every 500 steps) and raises `KeyboardInterrupt` here once it
+/// ([`absorber_sim::interrupt`], read every 500 steps) and raises `KeyboardInterrupt` here once it
 /// has (within a second), before any result reaches Python. The worker has the stack the
 /// command line's threads have (the full solver's frames are large); a panic in it is an
 /// `AbsorberError`, never an abort.
 fn interruptible<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
-    host_sim::interrupt::reset();
+    absorber_sim::interrupt::reset();
     std::thread::scope(|scope| {
         let worker = std::thread::Builder::new()
             .name("absorber".into())
@@ -73,7 +72,7 @@ fn interruptible<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> PyRes
             if signal.is_ok() {
                 signal = py.check_signals();
                 if signal.is_err() {
-                    host_sim::interrupt::raise();
+                    absorber_sim::interrupt::raise();
                 }
             }
             py.detach(|| std::thread::sleep(std::time::Duration::from_millis(50)));
@@ -202,15 +201,15 @@ fn number<T: for<'a, 'py> FromPyObject<'a, 'py>>(v: &Bound<'_, PyAny>, key: &str
 /// `frequency`, `amplitude`, `duration`, `step`), validated.
 fn scene_with(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -> PyResult<Scene> {
     let s = load_scene(scene)?;
-    let mut a = SceneArgs::default();
+    let mut a = Overrides::default();
     if let Some(o) = overrides {
         for (k, v) in o.iter() {
             let k: String = k.extract()?;
             match k.as_str() {
-                "solver" => a.model.solver = Some(parse_enum(&v, &k)?),
-                "kind" => a.model.kind = Some(parse_enum(&v, &k)?),
-                "precision" => a.model.precision = Some(parse_enum(&v, &k)?),
-                "elements" => a.model.elements = Some(number(&v, &k)?),
+                "solver" => a.solver = Some(parse_enum(&v, &k)?),
+                "kind" => a.kind = Some(parse_enum(&v, &k)?),
+                "precision" => a.precision = Some(parse_enum(&v, &k)?),
+                "elements" => a.elements = Some(number(&v, &k)?),
                 "frequency" => a.frequency = Some(number(&v, &k)?),
                 "amplitude" => a.amplitude = Some(number(&v, &k)?),
                 "duration" => a.duration = Some(number(&v, &k)?),
@@ -255,16 +254,16 @@ fn run<'py>(
     let ensemble = whole(ensemble, "ensemble", 1)?;
     let s = scene_with(scene, overrides)?;
     let w = warnings(&s);
-    let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
+    let e = absorber_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
     let (rows, summary) = interruptible(py, || {
         if e.is_ensemble() {
-            commands::run_ensemble_in_memory(&s, transient, every, e)
+            simulate::run_ensemble_in_memory(&s, transient, every, e)
         } else {
-            commands::run_in_memory(&s, transient, every)
+            simulate::run_in_memory(&s, transient, every)
         }
     })?
     .map_err(to_py)?;
-    let names = host_sim::run::csv_columns();
+    let names = absorber_sim::run::csv_columns();
     let mut columns = vec![Vec::with_capacity(rows.len()); names.len()];
     for r in &rows {
         for (c, x) in columns.iter_mut().zip(r.values()) {
@@ -287,7 +286,7 @@ fn static_summary(
     overrides: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<String> {
     let s = scene_with(scene, overrides)?;
-    interruptible(py, || commands::static_summary(&s))?
+    interruptible(py, || simulate::static_summary(&s))?
         .map(|v| v.to_string())
         .map_err(to_py)
 }
@@ -303,7 +302,7 @@ fn modes<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let count = whole(count, "count", 1)?;
     let s = scene_with(scene, overrides)?;
-    let f = interruptible(py, || commands::lowest_frequencies(&s, count))?.map_err(to_py)?;
+    let f = interruptible(py, || simulate::lowest_frequencies(&s, count))?.map_err(to_py)?;
     Ok(PyArray1::from_vec(py, f))
 }
 
@@ -332,14 +331,14 @@ fn sweep(
     let jobs = jobs.map(|n| whole(n, "jobs", 1)).transpose()?;
     let ensemble = whole(ensemble, "ensemble", 1)?;
     let s = scene_with(scene, overrides)?;
-    let e = host_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
+    let e = absorber_sim::ensemble::Ensemble::new(ensemble, seed).map_err(to_py)?;
     let text = interruptible(py, || -> anyhow::Result<String> {
         let f = freqs.as_deref();
         let (points, locked) = if e.is_ensemble() {
-            let (p, l) = commands::sweep_ensemble_in_memory(&s, f, last, jobs, e)?;
+            let (p, l) = simulate::sweep_ensemble_in_memory(&s, f, last, jobs, e)?;
             (serde_json::to_value(p)?, l)
         } else {
-            let (p, l) = commands::sweep_in_memory(&s, f, last, jobs)?;
+            let (p, l) = simulate::sweep_in_memory(&s, f, last, jobs)?;
             (serde_json::to_value(p)?, l)
         };
         Ok(serde_json::json!({ "points": points, "locked": locked }).to_string())
@@ -358,11 +357,11 @@ fn scene_toml(scene: &Bound<'_, PyAny>, overrides: Option<&Bound<'_, PyDict>>) -
 #[pymodule]
 fn _absorber(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // Messages name options as this package's keyword arguments (`transient=`, `last=`).
-    host_sim::output::spell_options_for_python();
+    absorber_sim::output::spell_options_for_python();
     m.add("AbsorberError", m.py().get_type::<AbsorberError>())?;
-    m.add("CSV_COLUMNS", host_sim::run::csv_columns())?;
-    m.add("SWEEP_COLUMNS", host_sim::sweep::csv_columns())?;
-    m.add("BUILT_IN_SCENES", host_sim::scene::BUILT_IN.to_vec())?;
+    m.add("CSV_COLUMNS", absorber_sim::run::csv_columns())?;
+    m.add("SWEEP_COLUMNS", absorber_sim::sweep::csv_columns())?;
+    m.add("BUILT_IN_SCENES", absorber_sim::scene::BUILT_IN.to_vec())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(static_summary, m)?)?;
     m.add_function(wrap_pyfunction!(modes, m)?)?;

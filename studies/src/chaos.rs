@@ -3,18 +3,18 @@
 //! docs/chaos.md.
 //!
 //! For each excitation frequency and each configuration (solver, elements, precision) and step
-//! h, an ensemble of K runs of the physics scene ([`host_sim::scene::Scene::physics`]) from
-//! seeded perturbations of the ball's initial state ([`host_sim::ensemble`]); each statistic is
+//! h, an ensemble of K runs of the physics scene ([`absorber_sim::scene::Scene::physics`]) from
+//! seeded perturbations of the ball's initial state ([`absorber_sim::ensemble`]); each statistic is
 //! the mean ± sd (min–max) over the members that completed. A statistic of the embedded model
 //! (core, 3 elements calibrated, f32, 3 ms) *converges* when it is within
 //! `max(spread, 10 %)` of the reference (the full solver, 16 elements, f64, at the finest
 //! step), the spread being the larger of the two ensembles' standard deviations; otherwise it
 //! is marked **not converged**. A member whose Newton solve fails is counted as a failure.
 
+use absorber_sim::ensemble::{perturbation, Ensemble, Spread};
+use absorber_sim::scene::{CalibrationSection, Precision, Scene, Solver};
 use anyhow::{Context, Result};
 use clap::Args;
-use host_sim::ensemble::{perturbation, Ensemble, Spread};
-use host_sim::scene::{CalibrationSection, Precision, Scene, Solver};
 use rayon::prelude::*;
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -48,7 +48,7 @@ pub struct ChaosArgs {
     #[arg(long, default_value_t = 8)]
     pub ensemble: usize,
     /// Seed of the perturbations.
-    #[arg(long, default_value_t = host_sim::ensemble::DEFAULT_SEED)]
+    #[arg(long, default_value_t = absorber_sim::ensemble::DEFAULT_SEED)]
     pub seed: u64,
     /// Simulated time of each run [s].
     #[arg(long, default_value_t = 120.0)]
@@ -265,7 +265,7 @@ pub fn run(a: &ChaosArgs) -> Result<()> {
                         c.clone(),
                         h,
                         m,
-                        host_sim::ensemble::member_scene(&s, e.seed, m),
+                        absorber_sim::ensemble::member_scene(&s, e.seed, m),
                     ));
                 }
             }
@@ -283,7 +283,7 @@ pub fn run(a: &ChaosArgs) -> Result<()> {
         jobs.par_iter()
             .map(|(f, c, h, m, s)| {
                 let t = std::time::Instant::now();
-                let r = host_sim::commands::summary_in_memory(s, Some(a.transient));
+                let r = absorber_sim::simulate::summary_in_memory(s, Some(a.transient));
                 let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 eprintln!(
                     "chaos: {n}/{total} ({f} Hz, {}, h = {h} s, member {m}){}",
@@ -321,7 +321,7 @@ pub fn run(a: &ChaosArgs) -> Result<()> {
     }
     let cpu: f64 = results.iter().map(|(_, t)| t).sum();
     let doc = document(a, e, &configs, &cells, wall, cpu);
-    host_sim::output::atomic_write(&a.out, doc.as_bytes())?;
+    absorber_sim::output::atomic_write(&a.out, doc.as_bytes())?;
     let failures: usize = cells.iter().map(|c| c.3.failures.len()).sum();
     eprintln!(
         "chaos: wrote {} ({total} runs, {failures} failed, {wall:.0} s)",
@@ -377,8 +377,8 @@ fn document(
          smaller than it is not a difference.\n",
         configs.iter().map(Config::label).collect::<Vec<_>>().join("; "),
         e.k,
-        host_sim::ensemble::ANGLE_SPREAD_DEG,
-        host_sim::ensemble::RATE_SPREAD,
+        absorber_sim::ensemble::ANGLE_SPREAD_DEG,
+        absorber_sim::ensemble::RATE_SPREAD,
         a.transient
     );
     let _ = writeln!(

@@ -4,9 +4,9 @@
 use crate::accuracy::AccuracyArgs;
 use crate::chaos::ChaosArgs;
 use crate::stability::StabilityArgs;
+use absorber_sim::output::PointsFailed;
 use anyhow::{bail, Result};
 use clap::{Args, Parser, Subcommand};
-use host_sim::output::PointsFailed;
 
 /// The studies that regenerate the measured documents of docs/ (a developer tool; the user's
 /// command line is `host-sim`). Run from the workspace root: the defaults write into docs/.
@@ -132,16 +132,16 @@ fn accuracy(a: &AccuracyArgs) -> Result<()> {
 fn monitoring(a: &MonitoringArgs) -> Result<()> {
     if let Some(d) = a.duration {
         // The table's regimes run at 3 ms (lab) and 10 ms (arm).
-        host_sim::estimate::check_duration(d, 0.01)?;
-        host_sim::estimate::check_duration(d, 0.003)?;
+        absorber_sim::estimate::check_duration(d, 0.01)?;
+        absorber_sim::estimate::check_duration(d, 0.003)?;
     }
     crate::monitoring::write(&a.out, a.duration)
 }
 
 fn firmware_gain(a: &FirmwareGainArgs) -> Result<()> {
-    let scene = host_sim::scene::Scene::load(&a.scene.to_string_lossy())?;
+    let scene = absorber_sim::scene::Scene::load(&a.scene.to_string_lossy())?;
     let text = crate::firmware_gain::constants(&scene)?;
-    host_sim::output::atomic_write(&a.out, text.as_bytes())?;
+    absorber_sim::output::atomic_write(&a.out, text.as_bytes())?;
     eprintln!("firmware-gain: wrote {}", a.out.display());
     Ok(())
 }

@@ -2,16 +2,16 @@
 //! constant-gain estimator of a scene's arm (`firmware/src/estimator_gain.rs`).
 
 use absorber_core::estimator::SensorKind;
-use anyhow::{anyhow, Result};
-use host_sim::estimate::arm::{calibrate_arm, root_section, ArmModel, D};
-use host_sim::estimate::constant::{design, FilterNoise};
-use host_sim::estimate::filter::ACCEL_BIAS_WALK;
-use host_sim::estimate::TRUTH_TOLERANCE;
-use host_sim::estimate::{
+use absorber_sim::estimate::arm::{calibrate_arm, root_section, ArmModel, D};
+use absorber_sim::estimate::constant::{design, FilterNoise};
+use absorber_sim::estimate::filter::ACCEL_BIAS_WALK;
+use absorber_sim::estimate::TRUTH_TOLERANCE;
+use absorber_sim::estimate::{
     arm_f32, core, params_f32, section_f32, ESTIMATOR_TOLERANCE, LOAD_STEP, LOAD_TIME,
     TRUTH_ELEMENTS,
 };
-use host_sim::scene::{Scene, SensorSpec};
+use absorber_sim::scene::{Scene, SensorSpec};
+use anyhow::{anyhow, Result};
 use nalgebra::SVector;
 use std::fmt::Write as _;
 

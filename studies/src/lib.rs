@@ -2,7 +2,7 @@
 //! user's `host-sim`: [`stability`] (docs/stability.md), [`accuracy`] (docs/accuracy.md and its
 //! figures), [`validation`] (docs/validation.md and its figures) and [`chaos`]
 //! (docs/chaos.md); [`cli`] is the `absorber-studies` command line over them. They drive the
-//! solvers through the host library (`host_sim`: scenes, runs, ensembles, output, plots) and the
+//! solvers through the simulation library (`absorber_sim`: scenes, runs, ensembles, output, plots) and the
 //! full solver (`absorber_full`).
 pub mod accuracy;
 pub mod chaos;

@@ -1,5 +1,5 @@
 //! `absorber-studies`: the studies that write docs/ (see `absorber-studies --help`).
 
 fn main() -> std::process::ExitCode {
-    host_sim::cli::process(absorber_studies::cli::main)
+    absorber_sim::process::process(absorber_studies::cli::main)
 }

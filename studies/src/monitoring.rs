@@ -3,10 +3,10 @@
 //! working point, and the mast arm's scenes of `scenes/` (first-mode wind, von Kármán wind,
 //! second-mode vortex lock-in read by a ±8 g and by the shipped ±2 g accelerometer).
 
+use absorber_sim::estimate::lab::EnsembleEstimator;
+use absorber_sim::estimate::EstimatorReport;
+use absorber_sim::scene::Scene;
 use anyhow::{Context, Result};
-use host_sim::estimate::lab::EnsembleEstimator;
-use host_sim::estimate::EstimatorReport;
-use host_sim::scene::Scene;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -20,7 +20,7 @@ pub const LAB: [(f64, &str); 4] = [
 ];
 
 /// Realizations of the lab study at the working point (the free ball is chaotic there: doc
-/// of [`host_sim::estimate::lab::LabEnsemble`]); off tuning one.
+/// of [`absorber_sim::estimate::lab::LabEnsemble`]); off tuning one.
 pub const LAB_MEMBERS: u32 = 4;
 
 /// The arm's scenes (in `scenes/`) and their regimes.
@@ -128,11 +128,11 @@ pub fn write(path: &Path, duration: Option<f64>) -> Result<()> {
         let mut scene = Scene::paper();
         scene.file.excitation.frequency = Some(f);
         let members = if f < 4.0 { 1 } else { LAB_MEMBERS };
-        let mut ens = host_sim::estimate::lab::lab_ensemble(
+        let mut ens = absorber_sim::estimate::lab::lab_ensemble(
             &scene,
             duration.unwrap_or(60.0),
             0.05,
-            host_sim::estimate::BaselineLoad::default(),
+            absorber_sim::estimate::BaselineLoad::default(),
             members,
         )?;
         let r = ens.reports.swap_remove(0);
@@ -149,8 +149,11 @@ pub fn write(path: &Path, duration: Option<f64>) -> Result<()> {
         let scene = Scene::load(scene_file(file).to_string_lossy().as_ref())
             .with_context(|| format!("scene {file}"))?;
         let d = duration.unwrap_or(scene.file.duration);
-        let (r, _) =
-            host_sim::estimate::twin(&scene, d, host_sim::estimate::BaselineLoad::default())?;
+        let (r, _) = absorber_sim::estimate::twin(
+            &scene,
+            d,
+            absorber_sim::estimate::BaselineLoad::default(),
+        )?;
         regimes.push(Regime {
             regime: name.into(),
             verdict: r.verdict,
@@ -196,9 +199,9 @@ pub fn write(path: &Path, duration: Option<f64>) -> Result<()> {
         "\nWorking-point rows: mean (least–greatest) over {LAB_MEMBERS} realizations (sensor seeds and 10⁻¹² rad of the truth's initial ball angle), NIS mean ± sd, the verdict on the pooled samples and the members' verdicts (ok / degraded / failed)."
     );
     let text = splice(path, &md)?;
-    host_sim::output::atomic_write(path, text.as_bytes())?;
+    absorber_sim::output::atomic_write(path, text.as_bytes())?;
     let json = path.with_extension("json");
-    host_sim::output::atomic_write(&json, serde_json::to_string_pretty(&regimes)?.as_bytes())?;
+    absorber_sim::output::atomic_write(&json, serde_json::to_string_pretty(&regimes)?.as_bytes())?;
     eprintln!(
         "monitoring: wrote {} and {}",
         path.display(),

@@ -175,7 +175,7 @@ fn violent_steps_converge_in_both_precisions() {
     let mut p = absorber_core::Params::<f64>::default();
     p.ball.flight = false;
     let (w64, i64_, m64) = run(p);
-    let (w32, i32_, m32) = run(host_sim::core_sim::params_f32(&p));
+    let (w32, i32_, m32) = run(absorber_sim::core_sim::params_f32(&p));
     println!(
         "50 mm, 4.13 Hz, 20 s: f64 max {w64} iterations/step (mean {m64:.2}), {i64_} impacts; f32 {w32} ({m32:.2}), {i32_}"
     );
@@ -229,7 +229,7 @@ fn modified_newton_at_5_ms_follows_full_newton() {
     p.integrator.gamma = gamma;
     p.integrator.beta = beta;
     p.damping.stiffness_proportional = c;
-    let (d32, amp) = run(host_sim::core_sim::params_f32(&p));
+    let (d32, amp) = run(absorber_sim::core_sim::params_f32(&p));
     let (d64, _) = run(p);
     let mut tight = p;
     tight.integrator.tolerance = 1e-7;

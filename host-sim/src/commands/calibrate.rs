@@ -1,13 +1,13 @@
 //! `calibrate` and `identify`: the reduced model fitted to the converged one or to a measured
-//! pole ([`crate::calibrate`], [`crate::identify`]).
+//! pole ([`absorber_sim::calibrate`], [`absorber_sim::identify`]).
 
 use super::{describe, load};
-use crate::calibrate::{fit, fit_damping, fit_f1, reference, Characteristics, DampingFit};
-use crate::calibrate::{residual_line, residual_quality, MAX_RESIDUAL};
 use crate::cli::{CalibrateArgs, IdentifyArgs};
-use crate::identify::{identify as identify_record, read_csv, Grade, Identified, Verdict};
-use crate::output::{OutputDir, Status};
-use crate::scene::{CalibrationSection, DampingSection, ExcitationType, ELEMENTS};
+use absorber_sim::calibrate::{fit, fit_damping, fit_f1, reference, Characteristics, DampingFit};
+use absorber_sim::calibrate::{residual_line, residual_quality, MAX_RESIDUAL};
+use absorber_sim::identify::{identify as identify_record, read_csv, Grade, Identified, Verdict};
+use absorber_sim::output::{OutputDir, Status};
+use absorber_sim::scene::{CalibrationSection, DampingSection, ExcitationType, ELEMENTS};
 use anyhow::{bail, Context, Result};
 use serde_json::json;
 
@@ -111,7 +111,7 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
     let mut pole = None;
     let mut damping: Option<DampingFit> = None;
     if let Some((f1, zeta)) = targets {
-        let mut f_model = crate::calibrate::scene_beam_mode(&s, &params, fit.model.f1)?;
+        let mut f_model = absorber_sim::calibrate::scene_beam_mode(&s, &params, fit.model.f1)?;
         if let Some(f1) = f1 {
             f_model = fit_f1(&s, &mut params, f1)?;
         }
@@ -156,7 +156,7 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<()> {
     }
     let text = format!("{header}{}", s.to_toml()?);
     // The file must load as written (the round trip every other command relies on).
-    crate::scene::parse(&text).context("internal: the written scene does not parse")?;
+    absorber_sim::scene::parse(&text).context("internal: the written scene does not parse")?;
     let path = dir.write(&name, &text)?;
     dir.commit(Status::Complete, serde_json::Value::Null)?;
     if a.json {

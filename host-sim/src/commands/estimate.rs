@@ -1,15 +1,15 @@
 //! `host-sim estimate`: the monitor's estimators against the full solver
-//! ([`crate::estimate`]): the twin of a real arm and the lab study (the regimes' table is
+//! ([`absorber_sim::estimate`]): the twin of a real arm and the lab study (the regimes' table is
 //! `absorber-studies monitoring`).
 
 use crate::cli::EstimateArgs;
-use crate::estimate::arm::TwinSeries;
-use crate::estimate::check_duration;
-use crate::estimate::lab::LabSeries;
-use crate::estimate::{EstimatorReport, LabReport, Quality, TwinReport};
-use crate::output::{OutputDir, Status};
-use crate::plot::{render, Panel, Series};
-use crate::scene::Scene;
+use absorber_sim::estimate::arm::TwinSeries;
+use absorber_sim::estimate::check_duration;
+use absorber_sim::estimate::lab::LabSeries;
+use absorber_sim::estimate::{EstimatorReport, LabReport, Quality, TwinReport};
+use absorber_sim::output::{OutputDir, Status};
+use absorber_sim::plot::{render, Panel, Series};
+use absorber_sim::scene::Scene;
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
 
@@ -33,7 +33,7 @@ fn check_tip_force(force: f64, scene: &Scene) -> Result<f64> {
 /// Runs the command.
 pub fn run(a: &EstimateArgs) -> Result<()> {
     let scene = Scene::load(&a.scene)?;
-    let baseline = crate::estimate::BaselineLoad {
+    let baseline = absorber_sim::estimate::BaselineLoad {
         step: a.load_step,
         time: a.load_time,
     };
@@ -49,15 +49,15 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
                 bail!("invalid value for `--frequency`: {f} (must be finite and positive)");
             }
             // The Nyquist limit and the resolution warning, as `run` has them.
-            super::check_excitations(&[f], &[], h, "--frequency", "")?;
-            crate::scene::check_harmonic(0.0, f, h, "", "--frequency")?;
+            absorber_sim::simulate::check_excitations(&[f], &[], h, "--frequency", "")?;
+            absorber_sim::scene::check_harmonic(0.0, f, h, "", "--frequency")?;
             scene.file.excitation.frequency = Some(f);
         }
         let mut out = match &a.out {
             Some(dir) => Some(OutputDir::open(dir, Some("lab"), "estimate --lab")?),
             None => None,
         };
-        let (r, series) = crate::estimate::lab(&scene, duration, a.tip_force, baseline)
+        let (r, series) = absorber_sim::estimate::lab(&scene, duration, a.tip_force, baseline)
             .with_context(|| {
                 format!(
                     "the lab study failed under `--tip-force` {} N (allowed: at most {most_force:.4e} \
@@ -89,7 +89,7 @@ pub fn run(a: &EstimateArgs) -> Result<()> {
         Some(dir) => Some(OutputDir::open(dir, Some("estimate"), "estimate")?),
         None => None,
     };
-    let (report, series) = crate::estimate::twin(&scene, duration, baseline)?;
+    let (report, series) = absorber_sim::estimate::twin(&scene, duration, baseline)?;
     if let Some(mut dir) = out.take() {
         // The S–N threshold of the arm's detail (constant-amplitude fatigue threshold) [MPa].
         let threshold = scene
@@ -169,7 +169,7 @@ fn figure_text(q: &Quality) -> String {
 
 /// A range bound with the digits it needs (0.5, 2, 0.71, 90, 99).
 fn fmt_bound(x: f64) -> String {
-    crate::run::trimmed(x, 2)
+    absorber_sim::run::trimmed(x, 2)
 }
 
 /// The per-estimator table of a study.
@@ -264,7 +264,7 @@ fn graded_json<T: serde::Serialize>(r: &T, e: &[EstimatorReport]) -> Result<Valu
     Ok(v)
 }
 
-fn print_setup(s: &crate::estimate::filter::Setup) {
+fn print_setup(s: &absorber_sim::estimate::filter::Setup) {
     println!(
         "filter: load model sd {:.3e} N, corner {:.2} Hz; model error ε {:.4}, near events ε_e {:.4}; stress factors {:.3} {:.3} {:.3}",
         s.load_sd,

@@ -1,16 +1,17 @@
 //! `fatigue`: damage rate at the clamp vs frequency, free vs locked ball.
 
-use super::{check_excitations, load, pool};
+use super::load;
 use crate::cli::{FatigueArgs, Moment};
-use crate::ensemble::Ensemble;
-use crate::fatigue::{
+use absorber_core::monitor::{MomentEstimate, MonitorConfig, ThresholdRule};
+use absorber_sim::ensemble::Ensemble;
+use absorber_sim::fatigue::{
     comparison_csv, csv, csv_members, fatigue_members, fatigue_points, ratio, Comparison,
     FatiguePoint,
 };
-use crate::output::{command_line, with_output, OutputDir, PointsFailed, Status};
-use crate::plot::{render, Panel, Series};
-use crate::sweep::PAPER_FREQUENCIES;
-use absorber_core::monitor::{MomentEstimate, MonitorConfig, ThresholdRule};
+use absorber_sim::output::{command_line, with_output, OutputDir, PointsFailed, Status};
+use absorber_sim::plot::{render, Panel, Series};
+use absorber_sim::simulate::{check_excitations, pool};
+use absorber_sim::sweep::PAPER_FREQUENCIES;
 use anyhow::Result;
 use serde_json::{json, Value};
 
@@ -55,7 +56,7 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
             );
         }
     }
-    let steady_from = super::run::steady_start(None, &s)?;
+    let steady_from = absorber_sim::simulate::time::steady_start(None, &s)?;
     let window = format!("steady: t ≥ {steady_from} s to the end");
     let ens = a.ensemble.ensemble()?;
     if ens.is_ensemble() && a.calibrate_against.is_some() {
@@ -136,8 +137,8 @@ pub fn run(a: &FatigueArgs) -> Result<()> {
         let mut comparison = None;
         if let Some(m) = a.calibrate_against {
             let n = s.file.elements;
-            let (reference, free) = crate::calibrate::reference(&s, m)?;
-            let fit = crate::calibrate::fit(&s, n, &reference, free)?;
+            let (reference, free) = absorber_sim::calibrate::reference(&s, m)?;
+            let fit = absorber_sim::calibrate::fit(&s, n, &reference, free)?;
             let mut cal = params;
             cal.calibration = fit.calibration;
             let mut plain = params;
@@ -286,7 +287,7 @@ fn ensemble_table(
     png: Option<&std::path::Path>,
     wall: f64,
 ) -> Result<()> {
-    use crate::ensemble::{aggregate, count_text, text};
+    use absorber_sim::ensemble::{aggregate, count_text, text};
     println!("{}", super::run::ensemble_line(ens));
     println!("  f [Hz]  A [mm]   D/h free                                   D/h locked                                 impacts (free)   in flight [%]");
     let mut failed = 0;
@@ -311,12 +312,12 @@ fn ensemble_table(
             .map(|p| serde_json::to_value(p).unwrap_or_default())
             .collect();
         let g = aggregate(&values, &["frequency", "amplitude"]);
-        let sci = |v: &Value| match crate::ensemble::spread_of(v) {
+        let sci = |v: &Value| match absorber_sim::ensemble::spread_of(v) {
             Some(sp) => format!(
                 "{:.3e} ± {:.1e} ({:.3e}–{:.3e})",
                 sp.mean, sp.sd, sp.min, sp.max
             ),
-            None => format!("{:.3e}", crate::ensemble::value(v)),
+            None => format!("{:.3e}", absorber_sim::ensemble::value(v)),
         };
         println!(
             "  {:6.3}  {:6.3}   {:41}  {:41}  {:15}  {}",

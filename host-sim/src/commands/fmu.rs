@@ -10,9 +10,9 @@
 //! differs from the one compiled into this `host-sim` (built from other sources) is refused.
 
 use crate::cli::{FmiVersion, FmuArgs};
-use crate::scene::{Kind, Precision, Scene, Solver};
 use absorber_fmu::config::{Config, Kind as FmuKind};
 use absorber_fmu::xml::{self, Version};
+use absorber_sim::scene::{Kind, Precision, Scene, Solver};
 use anyhow::{anyhow, bail, Context, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -45,7 +45,7 @@ pub fn config_of(s: &Scene) -> Result<Config> {
     };
     // The model must start: parameter errors name the scene key, as `run` does.
     absorber_fmu::sim::build(&config, &config.params, 0.0, 0.0)
-        .map_err(|e| crate::scene::map_core_error(e, s))?;
+        .map_err(|e| absorber_sim::scene::map_core_error(e, s))?;
     Ok(config)
 }
 
@@ -143,7 +143,7 @@ pub fn run(a: &FmuArgs) -> Result<()> {
         );
     }
     // Checked (writable, locked) before anything is built.
-    let (mut dir, name) = crate::output::OutputDir::for_file(&a.out, "fmu")
+    let (mut dir, name) = absorber_sim::output::OutputDir::for_file(&a.out, "fmu")
         .map_err(|e| anyhow!("invalid value for `--out`: {e:#}"))?;
     let s = super::load(&a.scene)?;
     let config = config_of(&s)?;
@@ -153,7 +153,10 @@ pub fn run(a: &FmuArgs) -> Result<()> {
         FmiVersion::V2 => Version::Fmi2,
     };
     dir.write_with(&name, |tmp| write_fmu(tmp, &config, version, &lib))?;
-    let written = dir.commit(crate::output::Status::Complete, serde_json::Value::Null)?;
+    let written = dir.commit(
+        absorber_sim::output::Status::Complete,
+        serde_json::Value::Null,
+    )?;
     let vars = absorber_fmu::vars::of_kind(config.kind).count();
     println!(
         "{}: FMI {} co-simulation FMU of scene {} ({} elements, {}, h = {} s), {} variables, library {}",

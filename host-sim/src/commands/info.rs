@@ -2,34 +2,14 @@
 
 use super::{describe, load};
 use crate::cli::{InfoArgs, ModesArgs, TuneArgs};
-use crate::output::{OutputDir, Status};
-use crate::scene::Scene;
-use crate::tune::tune;
+use absorber_sim::output::{OutputDir, Status};
+use absorber_sim::scene::Scene;
+use absorber_sim::simulate::linear::{lowest_frequencies, static_summary, structure};
+use absorber_sim::tune::tune;
 use anyhow::{bail, Result};
 use serde_json::json;
 
-use crate::tune::ARM_ELEMENTS;
-
-/// The structure `static` and `modes` describe: the scene's solver at rest, or for a scene with
-/// an `[arm]` the arm itself (full solver, [`ARM_ELEMENTS`] elements, f64), with its
-/// (solver, elements) as printed.
-fn structure(s: &Scene) -> Result<(Box<dyn absorber_full::sim::Simulator>, usize)> {
-    let Some(arm) = &s.file.arm else {
-        return Ok((crate::run::build_simulator(s, 0.0)?, s.file.elements));
-    };
-    use crate::scene::Kind;
-    use absorber_full::{FullSolver, SceneKind};
-    let kind = match s.file.kind {
-        Kind::Beam => SceneKind::BeamOnly,
-        Kind::Tip => SceneKind::TipMass,
-        Kind::Locked => SceneKind::LockedBall,
-        Kind::Free => SceneKind::FreeBall,
-        Kind::FreeNostops => SceneKind::FreeBallNoStops,
-    };
-    let sim = FullSolver::arm_at_rest(s.params()?, kind, ARM_ELEMENTS, &arm.params()?, 0.0)
-        .map_err(|e| crate::scene::map_core_error(e, s))?;
-    Ok((Box::new(sim), ARM_ELEMENTS))
-}
+use absorber_sim::tune::ARM_ELEMENTS;
 
 /// The line that says which structure an arm scene's figures describe.
 fn arm_note(s: &Scene) -> Option<String> {
@@ -38,27 +18,6 @@ fn arm_note(s: &Scene) -> Option<String> {
             "structure                  the [arm]: tapered tube with its heads, full solver, {ARM_ELEMENTS} elements, f64 (as `tune`)"
         )
     })
-}
-
-/// What `static --json` prints: scene, kind, elements, solver and the static tip deflection \[m\]
-/// (for a scene with an `[arm]`: of the arm, full solver, [`ARM_ELEMENTS`] elements).
-pub fn static_summary(s: &Scene) -> Result<serde_json::Value> {
-    let (sim, elements) = structure(s)?;
-    let d = sim.static_tip_deflection();
-    Ok(
-        json!({ "scene": s.file.name, "kind": s.file.kind.name(), "arm": s.file.arm.is_some(), "elements": elements, "solver": sim.solver_name(), "static_tip_deflection": d }),
-    )
-}
-
-/// The `count` lowest natural frequencies of the linearized model at the static equilibrium \[Hz\]
-/// (what `modes` prints; for a scene with an `[arm]`: of the arm, full solver,
-/// [`ARM_ELEMENTS`] elements).
-pub fn lowest_frequencies(s: &Scene, count: usize) -> Result<Vec<f64>> {
-    let (sim, _) = structure(s)?;
-    let f = sim
-        .natural_frequencies()
-        .map_err(|e| crate::scene::map_core_error(e, s))?;
-    Ok(f.into_iter().take(count).collect())
 }
 
 pub fn static_cmd(a: &InfoArgs) -> Result<()> {
@@ -94,7 +53,7 @@ pub fn modes(a: &ModesArgs) -> Result<()> {
         .collect();
     let numerical: Vec<Option<f64>> = f
         .iter()
-        .map(|x| crate::integrator::numerical_damping(&p.integrator, *x))
+        .map(|x| absorber_sim::integrator::numerical_damping(&p.integrator, *x))
         .collect();
     if a.json {
         println!(
@@ -146,7 +105,7 @@ pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
             );
         }
         // A real arm: the ball this scale would need, and whether it fits in a signal head.
-        let t = crate::tune::arm_track_radius(&s, a.ratio)?;
+        let t = absorber_sim::tune::arm_track_radius(&s, a.ratio)?;
         if a.json {
             println!("{}", serde_json::to_string(&t)?);
         } else {
@@ -166,7 +125,7 @@ pub fn tune_cmd(a: &TuneArgs) -> Result<()> {
                 println!(
                     "NOT BUILDABLE in a signal head: the track needs {:.0} mm of free space, a head offers about {:.0} mm",
                     2e3 * t.track_radius,
-                    1e3 * crate::tune::SIGNAL_HEAD_SPACE
+                    1e3 * absorber_sim::tune::SIGNAL_HEAD_SPACE
                 );
             }
         }

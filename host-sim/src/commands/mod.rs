@@ -1,5 +1,6 @@
 //! What each command does. The options are in [`crate::cli`]; the computations in the library
-//! modules (`run`, `sweep`, `fatigue`, `tune`); every file goes through [`crate::output`].
+//! [`absorber_sim`] (its in-memory runs in [`absorber_sim::simulate`]); every file goes through
+//! [`absorber_sim::output`].
 
 mod calibrate;
 mod estimate;
@@ -9,14 +10,11 @@ mod info;
 mod run;
 mod sweep;
 
-pub use info::{lowest_frequencies, static_summary};
-pub use run::{run_ensemble_in_memory, run_in_memory, step_damping_line, summary_in_memory};
-pub use sweep::{sweep_ensemble_in_memory, sweep_in_memory};
+pub use run::step_damping_line;
 
 use crate::cli::{Cli, Command, PaperArgs, SceneArgs};
-use crate::scene::{ExcitationType, Precision, Scene};
+use absorber_sim::scene::{ExcitationType, Precision, Scene};
 use anyhow::Result;
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::Path;
 
 /// Runs the parsed command line.
@@ -85,63 +83,4 @@ pub fn describe(s: &Scene) -> String {
         f.duration,
         f.integrator.step
     )
-}
-
-fn progress_bar(total: u64, what: &str) -> ProgressBar {
-    let pb = ProgressBar::new(total);
-    pb.set_style(
-        ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    pb.set_message(what.to_string());
-    pb
-}
-
-/// Worker pool of `jobs` threads (default: all cores) with big stacks for large models.
-/// The worker threads of a parallel command: `--jobs` (default: every core), capped at the
-/// `tasks` there are and at the cores: a thread more than either only costs memory (each gets a
-/// 64 MiB stack; the full solver's frames are large).
-fn pool(jobs: Option<usize>, tasks: usize) -> Result<rayon::ThreadPool> {
-    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
-    let wanted = match jobs {
-        Some(0) => anyhow::bail!(
-            "invalid value for `{}`: 0 (must be at least 1)",
-            crate::output::option("jobs")
-        ),
-        Some(j) => j,
-        None => cores,
-    };
-    let threads = wanted.min(cores).min(tasks.max(1));
-    if jobs.is_some_and(|j| j > threads) {
-        eprintln!("note: --jobs {wanted} runs on {threads} threads ({tasks} tasks, {cores} cores)");
-    }
-    Ok(rayon::ThreadPoolBuilder::new()
-        .stack_size(64 << 20)
-        .num_threads(threads)
-        .build()?)
-}
-
-/// Checks excitation frequencies and amplitudes given on the command line against the step
-/// (Nyquist, peak acceleration); warns when a period is poorly resolved.
-fn check_excitations(freqs: &[f64], amps: &[f64], h: f64, fkey: &str, akey: &str) -> Result<()> {
-    for &f in freqs {
-        if !f.is_finite() || f <= 0.0 {
-            anyhow::bail!("invalid value for `{fkey}`: {f} (must be finite and positive)");
-        }
-    }
-    for &a in amps {
-        if !a.is_finite() || a < 0.0 {
-            anyhow::bail!("invalid value for `{akey}`: {a} (must be finite and not negative)");
-        }
-    }
-    for &f in freqs {
-        for &a in amps {
-            crate::scene::check_harmonic(a, f, h, akey, fkey)?;
-        }
-        if let Some(w) = crate::scene::harmonic_warning(f, h, fkey) {
-            eprintln!("{w}");
-        }
-    }
-    Ok(())
 }

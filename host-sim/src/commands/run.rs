@@ -1,89 +1,34 @@
 //! `paper` and `run`: one scene in time, streamed (fixed memory whatever the duration).
 
-use super::{describe, load, pool, progress_bar};
+use super::{describe, load};
 use crate::cli::{PaperArgs, RunArgs};
-use crate::ensemble::Ensemble;
-use crate::excitation::Excitation;
-use crate::figures::{run_plots, PlotData};
-use crate::output::{command_line, with_output, OutputDir, Status};
-use crate::run::{scene_excitation, secs, simulate_with, RunStats, CSV_HEADER};
-use crate::scene::{Kind, Scene};
-use anyhow::{anyhow, bail, Result};
-use indicatif::ProgressBar;
+use absorber_sim::ensemble::Ensemble;
+use absorber_sim::figures::{run_plots, PlotData};
+use absorber_sim::output::{command_line, with_output, OutputDir, Status};
+use absorber_sim::run::{scene_excitation, CSV_HEADER};
+use absorber_sim::scene::{Kind, Scene};
+use absorber_sim::simulate::time::{
+    ensemble_summary, other_members, plan, steady_start, stream, stream_with,
+};
+use absorber_sim::simulate::{pool, progress_bar};
+use anyhow::Result;
 use serde_json::{json, Value};
 use std::time::Instant;
 
-/// Largest number of CSV rows of one run (about 350 bytes each); use `--every` beyond.
-pub const MAX_CSV_ROWS: u64 = 20_000_000;
-
-/// Start of the steady-state window: `--transient` (checked: 0 ≤ it, and it leaves at least
-/// [`MIN_STEADY_STEPS`] steps of the run), else the scene's `outputs.transient` (the same
-/// check, except that the built-in default 20 s on a run shorter than 40 s falls back to the
-/// run's second half, with a note). A window shorter than one excitation period is warned about.
-pub(crate) fn steady_start(cli: Option<f64>, s: &Scene) -> Result<f64> {
-    let h = s.file.integrator.step;
-    let end = s.steps() as f64 * h;
-    let check = |t: f64, key: &str| -> Result<f64> {
-        if !t.is_finite() || t < 0.0 {
-            bail!("invalid value for `{key}`: {t} (must be finite and not negative)");
-        }
-        let left = ((end - t) / h).round();
-        if left < MIN_STEADY_STEPS as f64 {
-            bail!(
-                "invalid value for `{key}`: {t} s leaves {} steps of the run ({} s) for the steady \
-                 state; allowed: 0 ≤ transient ≤ {} s (at least {MIN_STEADY_STEPS} steps after it)",
-                left.max(0.0),
-                secs(end),
-                secs(end - MIN_STEADY_STEPS as f64 * h)
-            );
-        }
-        if s.file.excitation.kind == crate::scene::ExcitationType::Harmonic {
-            let period = 1.0 / s.file.excitation.frequency_or_paper();
-            if end - t < period {
-                eprintln!(
-                    "warning: the steady-state window after `{key}` = {t} s is {:.4} s, shorter than one \
-                     excitation period ({period:.4} s): its amplitudes are not steady-state amplitudes",
-                    end - t
-                );
-            }
-        }
-        Ok(t)
-    };
-    if let Some(t) = cli {
-        return check(t, &crate::output::option("transient"));
-    }
-    let t = s.file.outputs.transient;
-    let default = crate::scene::OutputsSection::default().transient;
-    if t == default && t > end / 2.0 {
-        eprintln!(
-            "note: the default transient ({default} s) would leave less than half of the run ({} s); \
-             the steady-state figures use its second half (t ≥ {} s); set {} to choose",
-            secs(end),
-            secs(end / 2.0),
-            crate::output::option("transient")
-        );
-        return Ok(end / 2.0);
-    }
-    check(t, "outputs.transient")
-}
-
-/// Fewest steps a steady-state window may hold.
-pub const MIN_STEADY_STEPS: usize = 10;
-
-/// The number under `k` (a [`crate::ensemble::Spread`]'s mean in an ensemble's summary).
+/// The number under `k` (a [`absorber_sim::ensemble::Spread`]'s mean in an ensemble's summary).
 fn num(v: &Value, k: &str) -> f64 {
-    v.get(k).map_or(f64::NAN, crate::ensemble::value)
+    v.get(k).map_or(f64::NAN, absorber_sim::ensemble::value)
 }
 
 /// The statistic under `k` scaled by `scale` with `prec` decimals (`mean ± sd (min–max)` in
 /// an ensemble's summary).
 fn stat(v: &Value, k: &str, scale: f64, prec: usize) -> String {
-    crate::ensemble::text(v.get(k).unwrap_or(&Value::Null), scale, prec)
+    absorber_sim::ensemble::text(v.get(k).unwrap_or(&Value::Null), scale, prec)
 }
 
 /// The count under `k` (`mean ± sd (min–max)` in an ensemble's summary).
 fn count(v: &Value, k: &str) -> String {
-    crate::ensemble::count_text(v.get(k).unwrap_or(&Value::Null))
+    absorber_sim::ensemble::count_text(v.get(k).unwrap_or(&Value::Null))
 }
 
 /// A friction ratio: plain below 1000 (`4.73`), else in exponent form (`1.162e4`, where a
@@ -108,17 +53,6 @@ fn steady_impacts(s: &Value) -> String {
         ),
     }
 }
-
-/// The keys of a run's summary that are settings shared by the members of an ensemble, not
-/// statistics.
-pub const SHARED_KEYS: [&str; 6] = [
-    "ball",
-    "duration",
-    "steady_from",
-    "energy_window",
-    "friction",
-    "flight_resolution",
-];
 
 /// The summary lines of `paper` and `run` (an ensemble's statistics as `mean ± sd (min–max)`).
 pub fn summary_lines(s: &Value) -> Vec<String> {
@@ -188,7 +122,7 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
             stat(c, "normal_force_min_over_weight", 1.0, 2),
         ));
         }
-        let peak = match crate::ensemble::spread_of(
+        let peak = match absorber_sim::ensemble::spread_of(
             c.get("required_friction_max").unwrap_or(&Value::Null),
         ) {
             Some(p) => format!("{} ({}–{})", ratio(p.mean), ratio(p.min), ratio(p.max)),
@@ -205,114 +139,14 @@ pub fn summary_lines(s: &Value) -> Vec<String> {
     lines
 }
 
-/// Runs a scene, feeding every row to `each` (fixed memory); returns the summary.
-fn stream(
-    s: &Scene,
-    exc: &Excitation,
-    steady_from: f64,
-    what: &str,
-    each: impl FnMut(&crate::run::Row) -> Result<()>,
-) -> Result<Value> {
-    let pb = progress_bar(s.steps() as u64, what);
-    let r = stream_with(s, exc, steady_from, &pb, each);
-    pb.finish_and_clear();
-    r
-}
-
-/// [`stream`] advancing a progress bar that may be shared (by the members of an ensemble).
-fn stream_with(
-    s: &Scene,
-    exc: &Excitation,
-    steady_from: f64,
-    pb: &ProgressBar,
-    mut each: impl FnMut(&crate::run::Row) -> Result<()>,
-) -> Result<Value> {
-    let steps = s.steps();
-    let p = s.params()?;
-    let ball = s.file.kind.free_ball().then_some((
-        p.ball.mass * p.gravity,
-        p.ball.stop_angle,
-        s.file.ball.friction,
-    ));
-    let mut stats = RunStats::new(steps as f64 * s.file.integrator.step, steady_from)
-        .with_ball(ball)
-        .with_flight_resolution(s.file.outputs.flight_resolution);
-    let mut done = 0usize;
-    simulate_with(
-        s,
-        exc,
-        steps,
-        |row| {
-            stats.push(row);
-            each(row)
-        },
-        |k| {
-            pb.inc(k.saturating_sub(done) as u64);
-            done = k;
-        },
-    )?;
-    let mut summary = stats.json();
-    summary["ball"] = ball_state(s.file.kind).into();
-    Ok(summary)
-}
-
-/// What the summary's `ball` says: `free` (the ball's angle and stop impacts are figures of
-/// its own), `locked` (held in the housing: it turns with the tip mass and has no angle, stop
-/// impact or flight of its own) or `none`.
-pub fn ball_state(kind: Kind) -> &'static str {
-    if kind.free_ball() {
-        "free"
-    } else if kind.has_ball() {
-        "locked"
-    } else {
-        "none"
-    }
-}
-
-/// The summaries of members `1..K` of an ensemble (member 0, the scene itself, is run by the
-/// caller), in parallel, each failure naming its member.
-fn other_members(
-    s: &Scene,
-    exc: &Excitation,
-    steady_from: f64,
-    e: Ensemble,
-    pb: &ProgressBar,
-) -> Result<Vec<Value>> {
-    use rayon::prelude::*;
-    (1..e.k)
-        .into_par_iter()
-        .map(|m| {
-            let member = crate::ensemble::member_scene(s, e.seed, m);
-            stream_with(&member, exc, steady_from, pb, |_| Ok(())).map_err(|err| {
-                let (a, r) = crate::ensemble::perturbation(e.seed, m);
-                anyhow!(
-                    "ensemble member {m} (initial angle {:+.4}°, rate {r:+.5} rad/s): {err:#}",
-                    a
-                )
-            })
-        })
-        .collect()
-}
-
-/// Member 0's summary and the others', aggregated ([`crate::ensemble::aggregate`]); the plain
-/// summary for one member.
-fn ensemble_summary(first: Value, others: Vec<Value>) -> Value {
-    if others.is_empty() {
-        return first;
-    }
-    let mut all = vec![first];
-    all.extend(others);
-    crate::ensemble::aggregate(&all, &SHARED_KEYS)
-}
-
 pub fn paper(a: &PaperArgs) -> Result<()> {
     let t0 = Instant::now();
     let s = load(&a.scene)?;
     let from = steady_start(None, &s)?;
-    let sim = crate::run::build_simulator(&s, 0.0)?;
+    let sim = absorber_sim::run::build_simulator(&s, 0.0)?;
     let freqs = sim
         .natural_frequencies()
-        .map_err(|e| crate::scene::map_core_error(e, &s))?;
+        .map_err(|e| absorber_sim::scene::map_core_error(e, &s))?;
     let exc = scene_excitation(&s)?;
     let free = stream(&s, &exc, from, "free ball", |_| Ok(()))?;
     let mut locked = None;
@@ -382,8 +216,8 @@ pub fn physics_line(p: &Scene, summary: &Value) -> String {
         100.0 * f.damping.ratio.unwrap_or(0.0),
         f.elements,
         match f.precision {
-            crate::scene::Precision::F32 => "f32",
-            crate::scene::Precision::F64 => "f64",
+            absorber_sim::scene::Precision::F32 => "f32",
+            absorber_sim::scene::Precision::F64 => "f64",
         },
         f.integrator.step,
         f.duration,
@@ -415,102 +249,12 @@ pub fn step_damping_line(s: &Scene) -> Option<String> {
     ))
 }
 
-/// What `run` checks before it computes: the excitation (a CSV record is read here), the
-/// start of the steady-state window and the CSV row interval.
-fn plan(
-    s: &Scene,
-    transient: Option<f64>,
-    every: Option<usize>,
-) -> Result<(Excitation, f64, usize)> {
-    // The excitation (a CSV record) is read and checked before anything else.
-    let exc = scene_excitation(s)?;
-    let from = steady_start(transient, s)?;
-    let every = every.unwrap_or(s.file.outputs.every);
-    if every == 0 {
-        bail!(
-            "invalid value for `{}`: 0 (must be at least 1)",
-            crate::output::option("every")
-        );
-    }
-    let steps = s.steps();
-    let rows = steps as u64 / every as u64 + 1;
-    if rows > MAX_CSV_ROWS {
-        bail!(
-            "invalid value for `{opt}` (or `outputs.every`): {every} writes {rows} CSV rows for {steps} \
-             steps; allowed: at most {MAX_CSV_ROWS} rows (use {opt} {} or more)",
-            (steps as u64).div_ceil(MAX_CSV_ROWS - 1),
-            opt = crate::output::option("every"),
-        );
-    }
-    Ok((exc, from, every))
-}
-
-/// `run` in memory instead of files (the Python package's `run`): the rows the CSV would hold
-/// (every `every`-th step, default `outputs.every`) and the summary `run --json` prints, from
-/// the same checks and the same streamed computation as the command.
-pub fn run_in_memory(
-    s: &Scene,
-    transient: Option<f64>,
-    every: Option<usize>,
-) -> Result<(Vec<crate::run::Row>, Value)> {
-    let (exc, from, every) = plan(s, transient, every)?;
-    rows_in_memory(s, &exc, from, every)
-}
-
-/// The rows of `run_in_memory` for a planned run ([`plan`]: checked once, its notes printed
-/// once).
-fn rows_in_memory(
-    s: &Scene,
-    exc: &Excitation,
-    from: f64,
-    every: usize,
-) -> Result<(Vec<crate::run::Row>, Value)> {
-    let mut rows = Vec::new();
-    rows.try_reserve(s.steps() / every + 1).map_err(|_| {
-        anyhow::anyhow!(
-            "a run of {} rows does not fit in memory here",
-            s.steps() / every + 1
-        )
-    })?;
-    let mut k = 0u64;
-    let sum = stream(s, exc, from, "run", |r| {
-        if k.is_multiple_of(every as u64) {
-            rows.push(*r);
-        }
-        k += 1;
-        Ok(())
-    })?;
-    Ok((rows, sum))
-}
-
-/// The summary of `run --json` for `s`, without rows or files (the studies' runs).
-pub fn summary_in_memory(s: &Scene, transient: Option<f64>) -> Result<Value> {
-    let (exc, from, _) = plan(s, transient, None)?;
-    stream_with(s, &exc, from, &ProgressBar::hidden(), |_| Ok(()))
-}
-
-/// An ensemble's summary in memory (the Python package's `run(..., ensemble=K)`): the same
-/// checks as `run`, member 0's rows, and the statistics over the K members.
-pub fn run_ensemble_in_memory(
-    s: &Scene,
-    transient: Option<f64>,
-    every: Option<usize>,
-    e: Ensemble,
-) -> Result<(Vec<crate::run::Row>, Value)> {
-    crate::ensemble::check_scene(s, e)?;
-    let (exc, from, every) = plan(s, transient, every)?;
-    let (rows, first) = rows_in_memory(s, &exc, from, every)?;
-    let pb = ProgressBar::hidden();
-    let others = pool(None, e.k)?.install(|| other_members(s, &exc, from, e, &pb))?;
-    Ok((rows, ensemble_summary(first, others)))
-}
-
 pub fn run(a: &RunArgs) -> Result<()> {
     let t0 = Instant::now();
     let s = load(&a.scene)?;
     let f = &s.file;
     let ens = a.ensemble.ensemble()?;
-    crate::ensemble::check_scene(&s, ens)?;
+    absorber_sim::ensemble::check_scene(&s, ens)?;
     let (exc, from, every) = plan(&s, a.transient, a.every)?;
     let workers = pool(None, ens.k)?;
     let plots = if a.no_plots {
@@ -605,7 +349,7 @@ pub fn ensemble_line(e: Ensemble) -> String {
         "ensemble of {} runs (seed {}; initial ball angle ± {}°, rate ± {} rad/s): mean ± sd (min–max)",
         e.k,
         e.seed,
-        crate::ensemble::ANGLE_SPREAD_DEG,
-        crate::ensemble::RATE_SPREAD
+        absorber_sim::ensemble::ANGLE_SPREAD_DEG,
+        absorber_sim::ensemble::RATE_SPREAD
     )
 }

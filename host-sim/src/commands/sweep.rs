@@ -1,129 +1,22 @@
 //! `sweep`: the frequency response, one streamed run per frequency in parallel.
 
-use super::{check_excitations, describe, load, pool, progress_bar};
+use super::{describe, load};
 use crate::cli::SweepArgs;
-use crate::ensemble::{spread_of, Ensemble};
-use crate::output::{command_line, with_output, OutputDir, PointsFailed, Status};
-use crate::plot::{render, Panel, Series};
-use crate::scene::Scene;
-use crate::sweep::{aggregate_point, sweep, sweep_members, SweepPoint, PAPER_FREQUENCIES};
-use anyhow::{bail, Result};
+use absorber_sim::ensemble::{spread_of, Ensemble};
+use absorber_sim::output::{command_line, with_output, OutputDir, PointsFailed, Status};
+use absorber_sim::plot::{render, Panel, Series};
+use absorber_sim::scene::Scene;
+use absorber_sim::simulate::response::{check, locked_points, locked_scene, window};
+use absorber_sim::simulate::{pool, progress_bar};
+use absorber_sim::sweep::{aggregate_point, sweep, sweep_members, SweepPoint};
+use anyhow::Result;
 use serde_json::{json, Value};
 use std::time::Instant;
-
-/// The steady window's start \[s\]: `last` seconds before the end of each run, or (`None`) the
-/// start `run` and `paper` use ([`super::run::steady_start`]: `outputs.transient`, or the run's
-/// second half when the default 20 s would leave less; [`crate::run::steady_label`]).
-pub fn window(s: &Scene, last: Option<f64>) -> Result<f64> {
-    match last {
-        Some(l) => Ok(s.steps() as f64 * s.file.integrator.step - l),
-        None => super::run::steady_start(None, s),
-    }
-}
-
-/// What `sweep` checks before it computes: a harmonic scene, the frequencies (default: the
-/// paper's) against the step, and the window `last`; returns the frequencies.
-fn check(s: &Scene, freqs: Option<&[f64]>, from: f64) -> Result<Vec<f64>> {
-    let freqs = freqs.map_or_else(|| PAPER_FREQUENCIES.to_vec(), <[f64]>::to_vec);
-    if s.file.excitation.kind != crate::scene::ExcitationType::Harmonic {
-        bail!("sweep needs a harmonic excitation (the scene has type = \"csv\")");
-    }
-    let h = s.file.integrator.step;
-    check_excitations(
-        &freqs,
-        &[s.file.excitation.amplitude_or_paper()],
-        h,
-        &crate::output::option("freqs"),
-        &crate::output::option("amplitude"),
-    )?;
-    let duration = s.steps() as f64 * h;
-    let last = duration - from;
-    if !last.is_finite() || last < 10.0 * h || last >= duration {
-        bail!(
-            "invalid value for `{opt}`: {last} (the steady-state window must hold at least 10 steps, \
-             {} s, and be shorter than the run, {duration} s; without `{opt}` it is the run after \
-             `outputs.transient` = {} s)",
-            10.0 * h,
-            s.file.outputs.transient,
-            opt = crate::output::option("last"),
-        );
-    }
-    Ok(freqs)
-}
-
-/// The scene with its ball locked (the passive absorber `sweep` compares with), for a scene
-/// whose ball is free; `None` otherwise.
-pub fn locked_scene(s: &Scene) -> Option<Scene> {
-    s.file.kind.free_ball().then(|| {
-        let mut l = s.clone();
-        l.file.kind = crate::scene::Kind::Locked;
-        l
-    })
-}
-
-/// The locked ball's points at `freqs` (none without a free ball), on the current pool.
-fn locked_points(
-    locked: Option<&Scene>,
-    freqs: &[f64],
-    from: f64,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<SweepPoint>> {
-    match locked {
-        Some(l) => sweep(l, freqs, from, progress),
-        None => Ok(Vec::new()),
-    }
-}
-
-/// `sweep` in memory (the Python package's `sweep`): the same checks and the same parallel runs
-/// on `jobs` threads (default and at most: the cores and the frequencies), one point per
-/// frequency (failed points carry their error), and the locked ball's points as the command
-/// prints them (empty without a free ball).
-pub fn sweep_in_memory(
-    s: &Scene,
-    freqs: Option<&[f64]>,
-    last: Option<f64>,
-    jobs: Option<usize>,
-) -> Result<(Vec<SweepPoint>, Vec<SweepPoint>)> {
-    let from = window(s, last)?;
-    let freqs = check(s, freqs, from)?;
-    let pool = pool(jobs, freqs.len())?;
-    let locked = locked_scene(s);
-    pool.install(|| {
-        Ok((
-            sweep(s, &freqs, from, &|_| {})?,
-            locked_points(locked.as_ref(), &freqs, from, &|_| {})?,
-        ))
-    })
-}
-
-/// An ensemble's sweep in memory (the Python package's `sweep(..., ensemble=K)`): per frequency
-/// the aggregated point ([`crate::sweep::aggregate_point`]), and the locked ball's points (one
-/// run per frequency: a locked ball has no initial angle to perturb; empty without a free
-/// ball).
-pub fn sweep_ensemble_in_memory(
-    s: &Scene,
-    freqs: Option<&[f64]>,
-    last: Option<f64>,
-    jobs: Option<usize>,
-    e: Ensemble,
-) -> Result<(Vec<Value>, Vec<SweepPoint>)> {
-    let from = window(s, last)?;
-    let freqs = check(s, freqs, from)?;
-    let pool = pool(jobs, freqs.len() * e.k)?;
-    let l = locked_scene(s);
-    let (members, locked) = pool.install(|| -> Result<_> {
-        Ok((
-            sweep_members(s, &freqs, from, e, &|_| {})?,
-            locked_points(l.as_ref(), &freqs, from, &|_| {})?,
-        ))
-    })?;
-    Ok((members.iter().map(|m| aggregate_point(m)).collect(), locked))
-}
 
 pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
     let s = load(&a.scene)?;
     let ens = a.ensemble.ensemble()?;
-    crate::ensemble::check_scene(&s, ens)?;
+    absorber_sim::ensemble::check_scene(&s, ens)?;
     if ens.is_ensemble() {
         return sweep_ensemble_cmd(a, &s, ens);
     }
@@ -149,7 +42,10 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
         let locked =
             pool.install(|| locked_points(locked_scene.as_ref(), &freqs, from, &|n| pb.inc(n)))?;
         pb.finish_and_clear();
-        let csv_path = out.write("sweep.csv", &crate::sweep::csv(&points, &locked, from))?;
+        let csv_path = out.write(
+            "sweep.csv",
+            &absorber_sim::sweep::csv(&points, &locked, from),
+        )?;
         let png = if a.no_plots {
             None
         } else {
@@ -165,13 +61,13 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<()> {
     if a.json {
         println!(
             "{}",
-            json!({ "scene": s.file.name, "duration": s.file.duration, "last": s.steps() as f64 * s.file.integrator.step - from, "steady_from": from, "steady": crate::run::steady_label(from), "points": points, "locked": locked, "failed": failed.len(), "csv": csv_path, "plot": png, "wall_time": wall })
+            json!({ "scene": s.file.name, "duration": s.file.duration, "last": s.steps() as f64 * s.file.integrator.step - from, "steady_from": from, "steady": absorber_sim::run::steady_label(from), "points": points, "locked": locked, "failed": failed.len(), "csv": csv_path, "plot": png, "wall_time": wall })
         );
     } else {
         println!("{}", describe(&s));
         println!(
             "every column over the steady window: {}",
-            crate::run::steady_label(from)
+            absorber_sim::run::steady_label(from)
         );
         // The ball locked (the plot's dashed curve) beside the free ball, when it was run.
         let locked_head = if locked.is_empty() {
@@ -253,7 +149,7 @@ fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
         pb.finish_and_clear();
         let csv_path = out.write(
             "sweep.csv",
-            &crate::sweep::csv_members(&members, &locked, ens, from),
+            &absorber_sim::sweep::csv_members(&members, &locked, ens, from),
         )?;
         let points: Vec<Value> = members.iter().map(|m| aggregate_point(m)).collect();
         let png = if a.no_plots {
@@ -273,7 +169,7 @@ fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
     if a.json {
         println!(
             "{}",
-            json!({ "scene": s.file.name, "duration": s.file.duration, "last": s.steps() as f64 * s.file.integrator.step - from, "steady_from": from, "steady": crate::run::steady_label(from), "ensemble": ens.json(), "points": points, "locked": locked, "failed": failed, "csv": csv_path, "plot": png, "wall_time": wall })
+            json!({ "scene": s.file.name, "duration": s.file.duration, "last": s.steps() as f64 * s.file.integrator.step - from, "steady_from": from, "steady": absorber_sim::run::steady_label(from), "ensemble": ens.json(), "points": points, "locked": locked, "failed": failed, "csv": csv_path, "plot": png, "wall_time": wall })
         );
     } else {
         println!("{}", describe(s));
@@ -285,14 +181,14 @@ fn sweep_ensemble_cmd(a: &SweepArgs, s: &Scene, ens: Ensemble) -> Result<()> {
         };
         println!("  f [Hz]   tip Y [mm]                    ball max|θ| [deg]        ball θ half p-p [deg]    impacts{locked_head}");
         for (i, p) in points.iter().enumerate() {
-            let f = crate::ensemble::value(&p["frequency"]);
+            let f = absorber_sim::ensemble::value(&p["frequency"]);
             match p["error"].as_str() {
                 None => println!(
                     "  {f:6.3}   {:28}  {:23}  {:23}  {:7}{}",
-                    crate::ensemble::text(&p["tip_amplitude"], 1e3, 4),
-                    crate::ensemble::text(&p["ball_max_deg"], 1.0, 2),
-                    crate::ensemble::text(&p["ball_amplitude_deg"], 1.0, 2),
-                    crate::ensemble::count_text(&p["impacts"]),
+                    absorber_sim::ensemble::text(&p["tip_amplitude"], 1e3, 4),
+                    absorber_sim::ensemble::text(&p["ball_max_deg"], 1.0, 2),
+                    absorber_sim::ensemble::text(&p["ball_amplitude_deg"], 1.0, 2),
+                    absorber_sim::ensemble::count_text(&p["impacts"]),
                     locked_cell(locked.get(i)),
                 ),
                 Some(e) => println!("  {f:6.3}   FAILED: {e}"),
@@ -333,14 +229,18 @@ fn plot_ensemble(
     let failed: Vec<f64> = points
         .iter()
         .filter(|p| !p["error"].is_null())
-        .map(|p| crate::ensemble::value(&p["frequency"]))
+        .map(|p| absorber_sim::ensemble::value(&p["frequency"]))
         .collect();
     let band = |key: &str, label: &str, color: usize, scale: f64| -> Vec<Series> {
-        let pick = |g: fn(&crate::ensemble::Spread) -> f64| -> Vec<(f64, f64)> {
+        let pick = |g: fn(&absorber_sim::ensemble::Spread) -> f64| -> Vec<(f64, f64)> {
             ok.iter()
                 .filter_map(|p| {
-                    spread_of(&p[key])
-                        .map(|sp| (crate::ensemble::value(&p["frequency"]), scale * g(&sp)))
+                    spread_of(&p[key]).map(|sp| {
+                        (
+                            absorber_sim::ensemble::value(&p["frequency"]),
+                            scale * g(&sp),
+                        )
+                    })
                 })
                 .collect()
         };
@@ -357,7 +257,7 @@ fn plot_ensemble(
             s.file.name,
             s.file.kind.name(),
             s.file.excitation.amplitude_or_paper() * 1e3,
-            crate::run::steady_label(from),
+            absorber_sim::run::steady_label(from),
             s.file.duration,
             ens.k,
         ),
@@ -398,13 +298,13 @@ fn locked_series(locked: &[SweepPoint]) -> Option<Series> {
                 .collect(),
         )
         .dashed()
-        .colored(crate::plot::GREY)
+        .colored(absorber_sim::plot::GREY)
     })
 }
 
 fn plot(
     path: &std::path::Path,
-    s: &crate::scene::Scene,
+    s: &absorber_sim::scene::Scene,
     points: &[SweepPoint],
     locked: &[SweepPoint],
     from: f64,
@@ -429,7 +329,7 @@ fn plot(
             s.file.name,
             s.file.kind.name(),
             s.file.excitation.amplitude_or_paper() * 1e3,
-            crate::run::steady_label(from),
+            absorber_sim::run::steady_label(from),
             s.file.duration,
         ),
         &[

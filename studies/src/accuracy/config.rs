@@ -3,7 +3,7 @@
 
 use super::{integrator_for, PAPER_GAMMA};
 use absorber_core::{NewtonKind, Params};
-use host_sim::scene::Precision;
+use absorber_sim::scene::Precision;
 use serde::{Deserialize, Serialize};
 
 /// How a configuration solves the Newmark equations.

@@ -242,10 +242,10 @@ pub fn reference_config(n: usize, h: f64) -> Config {
 /// solver with `reference` elements (Table 1, ball locked; f₁, f₂, the free-ball beam mode,
 /// the static sag).
 pub fn calibrated(cfg: Config, reference: usize) -> Result<Config> {
-    let mut scene = host_sim::scene::Scene::paper();
-    scene.file.kind = host_sim::scene::Kind::Locked;
-    let (r, free) = host_sim::calibrate::reference(&scene, reference)?;
-    let fit = host_sim::calibrate::fit(&scene, cfg.elements, &r, free)?;
+    let mut scene = absorber_sim::scene::Scene::paper();
+    scene.file.kind = absorber_sim::scene::Kind::Locked;
+    let (r, free) = absorber_sim::calibrate::reference(&scene, reference)?;
+    let fit = absorber_sim::calibrate::fit(&scene, cfg.elements, &r, free)?;
     let c = fit.calibration;
     Ok(
         cfg.with(|x| {
@@ -279,7 +279,7 @@ pub fn cached_full(
         }
     }
     let t = run_full(cfg, scene, duration)?;
-    host_sim::output::atomic_write(&path, serde_json::to_string(&t)?.as_bytes())?;
+    absorber_sim::output::atomic_write(&path, serde_json::to_string(&t)?.as_bytes())?;
     Ok(t)
 }
 

@@ -21,9 +21,9 @@ pub struct Noise {
 
 impl Noise {
     /// `count` components spread evenly (jittered) over `[f_lo, f_hi]` Hz, random phases from
-    /// `seed` ([`host_sim::wind::Rng`]), equal amplitudes giving the RMS `rms` \[m/s²\].
+    /// `seed` ([`absorber_sim::wind::Rng`]), equal amplitudes giving the RMS `rms` \[m/s²\].
     pub fn new(seed: u64, count: usize, f_lo: f64, f_hi: f64, rms: f64) -> Self {
-        let mut rng = host_sim::wind::seeded(seed);
+        let mut rng = absorber_sim::wind::seeded(seed);
         let mut uniform = move || rand::RngExt::random::<f64>(&mut rng);
         let amp = rms * (2.0 / count as f64).sqrt();
         let parts = (0..count)

@@ -5,8 +5,8 @@
 use super::Body;
 use absorber_core::{Error, Params};
 use absorber_full::sim::Simulator;
-use host_sim::core_sim::{build_from, Start};
-use host_sim::scene::{Kind, Precision};
+use absorber_sim::core_sim::{build_from, Start};
+use absorber_sim::scene::{Kind, Precision};
 
 /// The embedded core for `body` with `n` elements in `f32` or `f64`, at rest with input `a0`.
 pub fn build_embedded(

@@ -503,7 +503,8 @@ pub fn matrix(length: Length) -> Vec<Case> {
 /// structural engineer checks it for. Both solvers' energy balances are checked with the work
 /// of the loads, each through its own [`Balance`] (see the page's introduction).
 pub(super) fn arm_cases(quick: bool) -> Vec<Case> {
-    let scene = host_sim::scene::Scene::from_toml(include_str!("../../../scenes/mast-arm.toml"));
+    let scene =
+        absorber_sim::scene::Scene::from_toml(include_str!("../../../scenes/mast-arm.toml"));
     let setup = scene.and_then(|sc| {
         let f = &sc.file;
         let arm_file = f
@@ -511,7 +512,7 @@ pub(super) fn arm_cases(quick: bool) -> Vec<Case> {
             .as_ref()
             .ok_or_else(|| anyhow::anyhow!("no `[arm]`"))?;
         let params = sc.params()?;
-        let taper = host_sim::scene::taper_of(arm_file, params.beam.length);
+        let taper = absorber_sim::scene::taper_of(arm_file, params.beam.length);
         Ok((
             params,
             arm_file.params()?,

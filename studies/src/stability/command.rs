@@ -63,7 +63,8 @@ pub fn command(args: &StabilityArgs) -> anyhow::Result<()> {
         Length::Full
     };
     // The document's directory: writable and ours before hours of computation.
-    let (mut out_dir, out_name) = host_sim::output::OutputDir::for_file(&args.out, "stability")?;
+    let (mut out_dir, out_name) =
+        absorber_sim::output::OutputDir::for_file(&args.out, "stability")?;
     let mut cases = matrix(length);
     if let Some(only) = &args.only {
         cases.retain(|c| c.group.contains(only.as_str()) || c.name.contains(only.as_str()));
@@ -127,7 +128,10 @@ pub fn command(args: &StabilityArgs) -> anyhow::Result<()> {
         t0.elapsed().as_secs_f64(),
     );
     out_dir.write(&out_name, &md)?;
-    out_dir.commit(host_sim::output::Status::Complete, serde_json::Value::Null)?;
+    out_dir.commit(
+        absorber_sim::output::Status::Complete,
+        serde_json::Value::Null,
+    )?;
     let known = results
         .iter()
         .filter(|(c, o)| !o.passes(&c.expect) && c.known_issue.is_some())

@@ -29,7 +29,7 @@ pub fn drift(frequency: f64, duration: f64, window: f64) -> Result<Vec<DriftWind
     let a0 = input.at(0, h);
     let mut m64: FreeBallModel<f64, 3, 13> = Model::at_rest(p, a0)?;
     let mut m32: FreeBallModel<f32, 3, 13> =
-        Model::at_rest(host_sim::core_sim::params_f32(&p), a0 as f32)?;
+        Model::at_rest(absorber_sim::core_sim::params_f32(&p), a0 as f32)?;
     let (s64, s32) = (
         m64.static_tip_deflection(),
         f64::from(m32.static_tip_deflection()),

@@ -27,7 +27,7 @@ use absorber_core::{
 };
 use absorber_full::sim::Simulator;
 use absorber_full::{FullSolver, SceneKind};
-use host_sim::wind::{LoadComponent, LoadModel};
+use absorber_sim::wind::{LoadComponent, LoadModel};
 use std::fmt::Write as _;
 use std::time::Instant;
 

@@ -307,7 +307,7 @@ pub(super) fn boxed<T: Real + 'static, S: Scene + 'static, const N: usize, const
 
 macro_rules! by_elements {
     ($t:ty, $s:ty, $x:tt, $n:expr, $p:expr, $a:expr) => {
-        host_sim::with_elements!(
+        absorber_sim::with_elements!(
             $n,
             [1, 2, 3, 16, 64],
             $x,
@@ -325,7 +325,7 @@ pub(super) fn locked<T: Real + 'static>(
     p: Params<T>,
     a0: T,
 ) -> Result<Box<dyn Probe>, Error> {
-    host_sim::with_elements!(
+    absorber_sim::with_elements!(
         n,
         [3],
         0,
@@ -350,14 +350,17 @@ pub(super) fn arm_core<T: Real + 'static>(
             reason: "arm stability cases: 3",
         });
     }
-    let m =
-        Model::<T, Arm<BeamOnly>, 3, 12>::arm_at_rest(p, &host_sim::core_sim::cast_arm(arm), a0)?;
+    let m = Model::<T, Arm<BeamOnly>, 3, 12>::arm_at_rest(
+        p,
+        &absorber_sim::core_sim::cast_arm(arm),
+        a0,
+    )?;
     Ok(Box::new(CoreProbe(m)))
 }
 
 /// The case's parameters in `f32`, with its Newton variant and budget rule.
 pub(super) fn f32_params(case: &Case) -> Params<f32> {
-    let p = host_sim::core_sim::params_f32(&case.params);
+    let p = absorber_sim::core_sim::params_f32(&case.params);
     Params {
         integrator: absorber_core::Integrator {
             newton: case.params.integrator.newton,

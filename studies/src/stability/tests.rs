@@ -61,8 +61,9 @@ fn full_and_core_balances_agree_on_the_mast_arm() {
 
 /// The work of the loads over 3 s of the storm (300 generalized-α steps, the buffeting force
 /// from the first step) is the same through either solver's `Balance`, and both runs pass the
-/// energy check. The solvers step the arm alike to ~1e-13 of the exchange (tests/arm_energies.rs),
-/// so 1e-6 of the work leaves room for the rounding of the sums only.
+/// energy check. The solvers step the arm alike to ~1e-13 of the exchange
+/// (absorber-sim/tests/arm_energies.rs), so 1e-6 of the work leaves room for the rounding of the
+/// sums only.
 #[test]
 fn full_and_core_load_work_agree_over_a_storm() {
     let core = arm_case("storm", Engine::CoreF64, 3.0);

@@ -4,12 +4,12 @@
 
 use super::signal::{ball_peaks, beat_period, max_in, mean_in, onset};
 use super::{ENSEMBLE, PAPER_FREQUENCIES};
+use absorber_sim::ensemble::{member_scene, Ensemble, Spread, DEFAULT_SEED};
+use absorber_sim::run::{run_rows, Row};
+use absorber_sim::scene::{Kind, Scene};
+use absorber_sim::sweep::{sweep, SweepPoint};
+use absorber_sim::tune::tune;
 use anyhow::Result;
-use host_sim::ensemble::{member_scene, Ensemble, Spread, DEFAULT_SEED};
-use host_sim::run::{run_rows, Row};
-use host_sim::scene::{Kind, Scene};
-use host_sim::sweep::{sweep, SweepPoint};
-use host_sim::tune::tune;
 
 /// A scene of the paper's parameters: `kind`, `n` elements, f64, core solver, harmonic
 /// excitation 0.5 mm at `frequency`, `duration` seconds.
@@ -179,8 +179,8 @@ fn statics(
 ) -> Result<(f64, f64, f64)> {
     progress("static equilibrium and modes");
     let statics = |n| -> Result<(f64, f64, f64)> {
-        let free = host_sim::run::build_simulator(&scene(Kind::Free, n, 4.13, 1.0), 0.0)?;
-        let locked = host_sim::run::build_simulator(&scene(Kind::Locked, n, 4.13, 1.0), 0.0)?;
+        let free = absorber_sim::run::build_simulator(&scene(Kind::Free, n, 4.13, 1.0), 0.0)?;
+        let locked = absorber_sim::run::build_simulator(&scene(Kind::Locked, n, 4.13, 1.0), 0.0)?;
         let f = free.natural_frequencies()?;
         Ok((
             free.static_tip_deflection(),
@@ -306,7 +306,7 @@ fn transfer(
         let early = mean_in(rows, 0.0, 10.0, |r| r.energies.beam_kinetic);
         let late = mean_in(rows, 50.0, 60.0, |r| r.energies.beam_kinetic);
         let ball = mean_in(rows, 50.0, 60.0, |r| r.energies.ball_kinetic);
-        let amp = host_sim::run::half_range(rows, 40.0, |r| r.tip_deflection);
+        let amp = absorber_sim::run::half_range(rows, 40.0, |r| r.tip_deflection);
         let impact = rows.iter().find(|r| r.impact).map_or(f64::NAN, |r| r.t);
         [early, late, ball, late / early, amp, impact]
     };
@@ -315,7 +315,7 @@ fn transfer(
     let (tuned413, tt) = ensemble_of(&tuned_scene(3), transfer)?;
     let (_, ttc) = ensemble_of(&tuned_scene(converged), transfer)?;
     let col = |m: &[[f64; 6]], i: usize| m.iter().map(|x| x[i]).collect::<Vec<f64>>();
-    let locked_amp = host_sim::run::half_range(&locked413, 40.0, |r| r.tip_deflection);
+    let locked_amp = absorber_sim::run::half_range(&locked413, 40.0, |r| r.tip_deflection);
     // The claim's criterion: the beam's kinetic energy 50–60 s at most a fifth of 0–10 s.
     const TRANSFER: (f64, f64) = (f64::NEG_INFINITY, 0.2);
     let kinetic = |m: &[[f64; 6]]| {

@@ -3,12 +3,12 @@
 
 use super::claims::{Histories, Study, Sweeps};
 use super::signal::{amplitude_blocks, running_mean};
+use absorber_sim::figures::ENERGY_MEAN_WINDOW;
+use absorber_sim::output::OutputDir;
+use absorber_sim::plot::{render, Panel, Series};
+use absorber_sim::run::Row;
+use absorber_sim::sweep::SweepPoint;
 use anyhow::Result;
-use host_sim::figures::ENERGY_MEAN_WINDOW;
-use host_sim::output::OutputDir;
-use host_sim::plot::{render, Panel, Series};
-use host_sim::run::Row;
-use host_sim::sweep::SweepPoint;
 
 /// Palette index of each scene, the same on every panel: free ball with Table 1 (N = 3), with
 /// Table 1 on the converged mesh, with the tuned R, locked ball.

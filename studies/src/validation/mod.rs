@@ -12,8 +12,8 @@ mod signal;
 #[cfg(test)]
 mod tests;
 
+use absorber_sim::output::{OutputDir, Status};
 use anyhow::Result;
-use host_sim::output::{OutputDir, Status};
 use std::path::Path;
 
 /// The paper's sweep frequencies (Fig. 10) \[Hz\].
@@ -21,7 +21,7 @@ pub const PAPER_FREQUENCIES: [f64; 14] = [
     3.50, 3.70, 3.80, 3.85, 3.90, 3.95, 4.00, 4.05, 4.10, 4.13, 4.25, 4.40, 4.50, 4.70,
 ];
 
-/// Members of the ensembles the chaotic claims are judged on (`host_sim::ensemble`: member 0 the
+/// Members of the ensembles the chaotic claims are judged on (`absorber_sim::ensemble`: member 0 the
 /// scene itself, the others with the ball's initial angle and rate perturbed, seeded with
 /// [`DEFAULT_SEED`]).
 pub const ENSEMBLE: usize = 8;
@@ -40,7 +40,7 @@ pub fn write(
         );
     }
     // Both directories writable and ours before the computation (one lock if they coincide).
-    let (mut doc_out, doc_name) = host_sim::output::OutputDir::for_file(doc, "validation")?;
+    let (mut doc_out, doc_name) = absorber_sim::output::OutputDir::for_file(doc, "validation")?;
     let same = std::fs::canonicalize(doc_out.dir()).ok()
         == std::fs::create_dir_all(img)
             .ok()

@@ -2,9 +2,9 @@
 
 use super::claims::{Study, Sweeps};
 use super::{ENSEMBLE, PAPER_FREQUENCIES};
+use absorber_sim::ensemble::DEFAULT_SEED;
+use absorber_sim::sweep::SweepPoint;
 use anyhow::Result;
-use host_sim::ensemble::DEFAULT_SEED;
-use host_sim::sweep::SweepPoint;
 use std::fmt::Write as _;
 
 /// The Markdown of docs/validation.md.
@@ -50,8 +50,8 @@ pub(super) fn markdown(study: &Study) -> Result<String> {
          over) and come from one run; so do the sweep points below (one run per frequency: where the ball hits \
          the stops they are single draws).",
         ENSEMBLE - 1,
-        host_sim::ensemble::ANGLE_SPREAD_DEG,
-        host_sim::ensemble::RATE_SPREAD,
+        absorber_sim::ensemble::ANGLE_SPREAD_DEG,
+        absorber_sim::ensemble::RATE_SPREAD,
     )?;
     writeln!(md)?;
     writeln!(

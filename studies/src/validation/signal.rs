@@ -2,9 +2,9 @@
 //! the ball's beat period and spectral peaks, the sweep's onset, block amplitudes and running
 //! means.
 
-use host_sim::fft;
-use host_sim::run::Row;
-use host_sim::sweep::SweepPoint;
+use absorber_sim::fft;
+use absorber_sim::run::Row;
+use absorber_sim::sweep::SweepPoint;
 
 /// Largest value of `x` over rows with `from ≤ t < to`.
 pub(super) fn max_in(rows: &[Row], from: f64, to: f64, x: impl Fn(&Row) -> f64) -> f64 {

@@ -1,7 +1,7 @@
 //! The verdict rule of the chaotic claims.
 
 use super::claims::{judge, Judged};
-use host_sim::ensemble::Spread;
+use absorber_sim::ensemble::Spread;
 
 /// The verdict rule on bands placed by hand against the two criteria of the document.
 #[test]

@@ -311,7 +311,7 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     );
     // The report directory writable and ours (one command at a time) before any computation;
     // the files themselves are written atomically.
-    let _lock = host_sim::output::OutputDir::open(&out, None, "accuracy")?;
+    let _lock = absorber_sim::output::OutputDir::open(&out, None, "accuracy")?;
     // 1. Convergence of the reference.
     let conv = convergence(&p, &cache)?;
     eprintln!(
@@ -422,7 +422,7 @@ pub fn run(a: &AccuracyArgs) -> Result<()> {
     std::fs::create_dir_all(out.join("img"))
         .with_context(|| format!("cannot create `{}`", out.join("img").display()))?;
     let md = ctx.write(&out, a.quick, started)?;
-    host_sim::output::atomic_write(&out.join("accuracy.md"), md.as_bytes())?;
+    absorber_sim::output::atomic_write(&out.join("accuracy.md"), md.as_bytes())?;
     eprintln!(
         "accuracy: wrote {} ({:.0} s)",
         out.join("accuracy.md").display(),

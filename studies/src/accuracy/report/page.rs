@@ -1,8 +1,8 @@
 //! The generated page: tables, the Pareto front and the notes around them.
 
 use super::*;
+use absorber_sim::plot::{render, Panel, Series};
 use anyhow::Result;
-use host_sim::plot::{render, Panel, Series};
 use std::fmt::Write as _;
 
 pub(super) struct Ctx {
@@ -467,7 +467,7 @@ impl Ctx {
     }
 
     fn plot_pareto(&self, out: &Path, pts: &[(f64, f64)], front: &[bool]) -> Result<()> {
-        host_sim::output::atomic_with(&out.join("img/accuracy_pareto.png"), |p| {
+        absorber_sim::output::atomic_with(&out.join("img/accuracy_pareto.png"), |p| {
             self.plot_pareto_at(p, pts, front)
         })
     }

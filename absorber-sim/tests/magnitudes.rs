@@ -3,7 +3,7 @@
 //! f64 mass or stiffness matrix within 1/ε, lengths within 1/√ε, a ball's inertia at most
 //! m·r²). Before, each of these ended in "cannot start: … singular" naming no key.
 
-use host_sim::scene::Scene;
+use absorber_sim::scene::Scene;
 
 fn refused(toml: &str, words: &[&str]) {
     let e = match Scene::from_toml(toml) {
@@ -88,7 +88,7 @@ fn scenes_within_the_ranges_are_accepted() {
 /// naming the option, its value and the most it may be.
 #[test]
 fn a_load_step_the_filter_cannot_resolve_is_refused_by_name() {
-    use host_sim::estimate::{lab, BaselineLoad};
+    use absorber_sim::estimate::{lab, BaselineLoad};
     let huge = BaselineLoad {
         step: Some(1e12),
         time: 5.0,

@@ -9,7 +9,7 @@ use absorber_full::sim::Simulator;
 use absorber_full::{FullSolver, SceneKind};
 
 fn mast_arm() -> (absorber_core::Params<f64>, absorber_core::ArmParams<f64>) {
-    let scene = host_sim::scene::Scene::from_toml(include_str!("../../scenes/mast-arm.toml"))
+    let scene = absorber_sim::scene::Scene::from_toml(include_str!("../../scenes/mast-arm.toml"))
         .expect("scene");
     let arm = scene
         .file

@@ -148,7 +148,7 @@ fn second_mode_lock_in_is_estimated_and_clipping_is_flagged() {
     }
 }
 
-/// Measurement, not a check (`cargo test --release -p host-sim --lib
+/// Measurement, not a check (`cargo test --release -p absorber-sim --lib
 /// calibration_draw_spread -- --ignored --nocapture`, a few minutes): the model error ε
 /// matched on one draw of the calibration load against K pooled draws, and the tip
 /// accelerometer's mean NIS on the 10 min study with it — the spread over draws that

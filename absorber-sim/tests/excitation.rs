@@ -1,7 +1,7 @@
 //! A measured base acceleration processed as strong-motion records are: the base starts and
 //! ends at rest, a record that already does is kept, and energies are measured from rest.
 
-use host_sim::excitation::Excitation;
+use absorber_sim::excitation::Excitation;
 use std::f64::consts::{PI, TAU};
 
 /// A 20 ms half-sine of `peak` m/s² at 0.5 s, 1 ms samples, `len` s: a velocity change of
@@ -102,13 +102,13 @@ fn a_record_at_rest_at_both_ends_is_kept() {
 /// 5 % of the peak), and the base ends where it started.
 #[test]
 fn energies_after_a_tap_are_positive_and_decay() {
-    let scene = host_sim::scene::Scene::load(concat!(
+    let scene = absorber_sim::scene::Scene::load(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../examples/pole.toml"
     ))
     .unwrap();
-    let rows = host_sim::run::run_rows(&scene, |_| {}).unwrap();
-    let total = |r: &host_sim::run::Row| r.energies.total();
+    let rows = absorber_sim::run::run_rows(&scene, |_| {}).unwrap();
+    let total = |r: &absorber_sim::run::Row| r.energies.total();
     let e0 = total(&rows[0]);
     let e: Vec<(f64, f64)> = rows.iter().map(|r| (r.t, total(r) - e0)).collect();
     let peak = e.iter().map(|x| x.1).fold(0.0, f64::max);

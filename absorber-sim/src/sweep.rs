@@ -39,9 +39,8 @@ pub struct SweepPoint {
 }
 
 /// Runs the sweep. `from`: the steady window's start \[s\] (every figure of a point is over
-/// t ≥ `from` to the end; `commands::sweep::window` gives the default, the window of `run` and
-/// `paper`); `progress(steps)`
-/// is called (from worker threads) with step increments.
+/// t ≥ `from` to the end; [`crate::simulate::response::window`] gives the default, the window of
+/// `run` and `paper`); `progress(steps)` is called (from worker threads) with step increments.
 pub fn sweep(
     scene: &Scene,
     frequencies: &[f64],

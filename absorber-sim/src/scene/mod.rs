@@ -30,6 +30,7 @@
 
 mod arm;
 mod checks;
+mod overrides;
 mod sections;
 mod sensors;
 #[cfg(test)]
@@ -37,6 +38,7 @@ mod tests;
 
 pub use arm::*;
 pub use checks::*;
+pub use overrides::Overrides;
 pub use sections::*;
 pub use sensors::*;
 
