@@ -16,7 +16,7 @@
 use crate::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector, TangentBlocks};
 use crate::linalg::BandMatrix;
 use crate::scalar::Real;
-use crate::tip::Chain;
+use crate::scheme::Chain;
 use nalgebra::SVector;
 
 /// Precomputed data of the uniform beam.

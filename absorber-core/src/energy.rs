@@ -13,10 +13,11 @@
 use crate::ancf::{Element, ElementVector};
 use crate::beam::{gather, Beam};
 use crate::loads::SceneData as _;
-use crate::model::{Model, State};
+use crate::model::Model;
 use crate::outputs::Angles;
 use crate::scalar::{lit, Real};
 use crate::scene::Scene;
+use crate::state::State;
 
 /// Energies of the bodies \[J\].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,7 +112,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub(crate) fn equilibrium_heights(&self) -> Heights<T> {
         let s = State {
             q: self.sys.equilibrium,
-            contact: crate::model::Contact::Off,
+            contact: crate::state::Contact::Off,
             ..self.state
         };
         let ang = self.angles_of(&s);
@@ -167,7 +168,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let ang = self.angles_of(s);
         let (sin_theta, cos_theta) = ang.theta_sin_cos().unwrap_or((z, T::one()));
         let mut now = self.heights(&s.q, &ang, cos_theta);
-        let flying = s.contact == crate::model::Contact::InFlight;
+        let flying = s.contact == crate::state::Contact::InFlight;
         if flying {
             now.ball = s.flight.centre[1];
         }
@@ -221,7 +222,7 @@ mod tests {
     use crate::beam::gather;
     use crate::loads::{ArmParams, PointMass, MAX_POINT_MASSES};
     use crate::scene::{Arm, BeamOnly, FreeBall};
-    use crate::tip::Chain;
+    use crate::scheme::Chain;
     use crate::{Contact, Model, Params};
     use nalgebra::SVector;
 

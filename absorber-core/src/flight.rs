@@ -72,10 +72,11 @@
 //! a consistent acceleration (`flight_events_at_end`, docs/model.md).
 
 use crate::error::Error;
-use crate::model::{Contact, Impact, Side, State, StepReport};
 use crate::newton::Workspace;
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
+use crate::state::{Contact, Impact, Side, State, StepReport};
+pub use crate::state::{Flight, Landing};
 use crate::system::System;
 use crate::tip;
 use nalgebra::SVector;
@@ -115,64 +116,6 @@ struct FlightEvent<T> {
 /// solvers took different branches there (a rolling landing with a normal impulse of rounding
 /// size, or none).
 pub const GRAZING: f64 = 1e-6;
-
-/// The ball's centre while it flies, in the frame translating with the base (x along the
-/// undeformed beam from the clamp, y up): position \[m\], velocity \[m/s\], acceleration
-/// \[m/s²\] and the generalized-α variable of the acceleration. Read only while the state's
-/// contact is [`Contact::InFlight`] (the spin is the state's φ, its rate ω = φ̇).
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct Flight<T> {
-    /// Centre c \[m\].
-    pub centre: [T; 2],
-    /// ċ \[m/s\].
-    pub velocity: [T; 2],
-    /// c̈ = (0, −g_eff) \[m/s²\].
-    pub accel: [T; 2],
-    /// The generalized-α scheme's acceleration-like variable (= `accel` for Newmark).
-    pub pseudo_accel: [T; 2],
-    /// The flight has reached `ball.lift_height` (it counts as a separation; module doc).
-    pub lifted: bool,
-}
-
-impl<T: Real> Flight<T> {
-    /// All zero (the ball on the track).
-    pub fn zero() -> Self {
-        let z = [T::zero(); 2];
-        Self {
-            centre: z,
-            velocity: z,
-            accel: z,
-            pseudo_accel: z,
-            lifted: false,
-        }
-    }
-}
-
-/// A landing of the ball on the track.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Landing<T> {
-    /// Time of the landing \[s\].
-    pub time: T,
-    /// Normal speed towards the track before the landing, `n·(ċ − Ȧ)` \[m/s\] (with events at
-    /// the step end: at the crossing, the rate of the Hermite interpolant whose root it is).
-    pub normal_speed: T,
-    /// Normal impulse of the track on the ball, towards A \[N·s\].
-    pub normal_impulse: T,
-    /// Tangential impulse of the track on the ball along `t = (cos θ, sin θ)` \[N·s\] (zero
-    /// for a bounce, which is frictionless).
-    pub tangential_impulse: T,
-    /// The ball bounced back into flight (else it rolls on).
-    pub bounced: bool,
-}
-
-impl<T: Real> Landing<T> {
-    /// The friction coefficient the landing needed, `|P_t| / P_n`; `None` without a normal
-    /// impulse.
-    pub fn required_friction(&self) -> Option<T> {
-        is_positive(self.normal_impulse)
-            .then(|| self.tangential_impulse.abs() / self.normal_impulse)
-    }
-}
 
 /// Fraction τ ∈ \[0, 1\] of a step at which the normal force, `n_start` at its start and
 /// `n_end < 0` at its end, crosses zero (linear in N); 0 when it was not positive at the start.
@@ -1295,7 +1238,7 @@ mod tests {
             landing: None,
             work: 0,
             outcome: crate::Outcome::Converged,
-            events: crate::model::EventCounts::default(),
+            events: crate::state::EventCounts::default(),
         };
         m.sys.land(&mut s, &mut ws, &mut report).expect("land");
         let l = report.landing.expect("landed");
@@ -1335,7 +1278,7 @@ mod tests {
             landing: None,
             work: 0,
             outcome: crate::Outcome::Converged,
-            events: crate::model::EventCounts::default(),
+            events: crate::state::EventCounts::default(),
         }
     }
 
@@ -1464,7 +1407,7 @@ mod tests {
             if model == ImpactModel::Instantaneous {
                 let z = SVector::<f64, 13>::zeros();
                 let matrix = |q: &SVector<f64, 13>, c_q: f64, c_m: f64| {
-                    let ch = crate::tip::Chain { c_q, c_v: 0.0, c_m };
+                    let ch = crate::scheme::Chain { c_q, c_v: 0.0, c_m };
                     let (_, j, _) =
                         m.sys
                             .assemble(q, &z, &z, p.gravity, &ch, Contact::InFlight, false);

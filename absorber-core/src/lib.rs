@@ -40,6 +40,7 @@
 
 pub mod ancf;
 pub mod beam;
+pub mod convergence;
 pub mod dual;
 pub mod energy;
 pub mod error;
@@ -56,19 +57,19 @@ pub mod outputs;
 pub mod params;
 pub mod scalar;
 pub mod scene;
+pub mod scheme;
+pub mod state;
 pub mod statics;
 pub mod stops;
 pub mod system;
 pub mod tip;
 pub mod trig;
+pub mod work;
 
 pub use energy::Energies;
 pub use error::Error;
-pub use flight::{Flight, Landing};
 pub use loads::{ArmParams, Loads, PointMass};
-pub use model::{
-    Contact, EventCounts, Impact, Model, Outcome, Side, State, StepReport, RESTART_AFTER,
-};
+pub use model::Model;
 pub use outputs::ContactForces;
 pub use params::{
     AtCap, BallParams, BeamParams, Calibration, Damping, EventLocation, ImpactModel, Integrator,
@@ -78,6 +79,9 @@ pub use scalar::Real;
 pub use scene::{
     Arm, AtStepEnd, BallKind, BeamOnly, FreeBall, FreeBallNoFlight, FreeBallNoStops, Lean, Loaded,
     LockedBall, Scene, TipMass,
+};
+pub use state::{
+    Contact, EventCounts, Flight, Impact, Landing, Outcome, Side, State, StepReport, RESTART_AFTER,
 };
 
 /// Beam alone, `N` elements, `D = 4N` unknowns.

@@ -1,8 +1,10 @@
 //! What firmware reads back after a step.
 
-use crate::model::{Contact, Model, State};
+use crate::model::Model;
+
 use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
+use crate::state::{Contact, State};
 use crate::tip;
 
 /// The force the track puts on the ball centre, in the track's frame (free-ball scenes).

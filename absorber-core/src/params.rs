@@ -160,16 +160,16 @@ pub struct Integrator<T> {
     /// Where a stop impact of the rolling ball inside a step is put (the flight events, the
     /// ball leaving and landing on the track, always split the step at their crossing).
     pub events: EventLocation,
-    /// Hard cap on the work of one step, in work units ([`crate::newton::work`]: an assembly
+    /// Hard cap on the work of one step, in work units ([`crate::work`]: an assembly
     /// with its factorization 16, a residual 5, a back-substitution 1), summed over every
     /// solve of the step: the Newmark solve, an event's sub-steps, impulses and consistent
     /// accelerations, the damping trials. A solve that reaches it stops with its iterate and
     /// the step is flagged ([`crate::Outcome::Capped`]); repeated capped or failed steps make
     /// the model restart itself ([`crate::Model::step`]). Default
-    /// [`work::UNLIMITED`](crate::newton::work::UNLIMITED) (the iteration limits alone);
+    /// [`work::UNLIMITED`](crate::work::UNLIMITED) (the iteration limits alone);
     /// firmware with a deadline per sample sets it with `events` (`docs/embedded.md`). At
-    /// least [`work::MIN_CAP`](crate::newton::work::MIN_CAP), at most
-    /// [`work::UNLIMITED`](crate::newton::work::UNLIMITED) (a step's time stays bounded).
+    /// least [`work::MIN_CAP`](crate::work::MIN_CAP), at most
+    /// [`work::UNLIMITED`](crate::work::UNLIMITED) (a step's time stays bounded).
     pub max_work: u32,
     /// What a step whose Newton solve stopped at the work cap does ([`AtCap`]; default
     /// `Take`: measured in `docs/accuracy.md`, "The work cap").
@@ -390,7 +390,7 @@ impl<T: Real> Default for Params<T> {
                 newton: NewtonKind::PerStep,
                 accept_after_budget: false,
                 events: EventLocation::Crossing,
-                max_work: crate::newton::work::UNLIMITED,
+                max_work: crate::work::UNLIMITED,
                 at_cap: AtCap::Take,
             },
             damping: Damping {
@@ -559,14 +559,14 @@ impl<T: Real> Params<T> {
                 reason: "must be at least 1",
             });
         }
-        if i.max_work < crate::newton::work::MIN_CAP {
+        if i.max_work < crate::work::MIN_CAP {
             return Err(Error::InvalidParameter {
                 field: "integrator.max_work",
                 reason:
                     "must afford the event tests, one refreshed Newton iteration and the reserve (24 units)",
             });
         }
-        if i.max_work > crate::newton::work::UNLIMITED {
+        if i.max_work > crate::work::UNLIMITED {
             return Err(Error::InvalidParameter {
                 field: "integrator.max_work",
                 reason: "must be at most 50,000 units (`work::UNLIMITED`, the default: the work the iteration limits allow); more would leave a step unbounded in time",

@@ -24,11 +24,11 @@
 //! to pull it.
 
 use crate::error::Error;
-use crate::model::{Contact, Impact, Side, State, StepReport};
 use crate::newton::Workspace;
 use crate::params::{EventLocation, ImpactModel};
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
+use crate::state::{Contact, Impact, Side, State, StepReport};
 use crate::system::{Problem, System};
 use crate::tip::{self, Chain};
 use nalgebra::SVector;

@@ -8,15 +8,15 @@
 
 use crate::ancf::TangentBlocks;
 use crate::beam::Beam;
+use crate::convergence::MAX_STEP;
 use crate::dual::Plain;
 use crate::error::Error;
 use crate::linalg::{BandMatrix, PIVOT_RATIO};
 use crate::loads::SceneData;
-use crate::model::{Contact, State};
-use crate::newton::MAX_STEP;
 use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::{BallKind, Scene};
+use crate::state::{Contact, State};
 use crate::tip::{self, BallMode, Chain, LocalState, TipInertia, D5, LOCAL};
 use core::marker::PhantomData;
 use nalgebra::{SMatrix, SVector};
@@ -37,13 +37,13 @@ pub struct System<T: Real, S: Scene, const N: usize, const D: usize> {
     pub(crate) pivot_ratio: T,
     pub(crate) max_step: T,
     /// What a reused matrix's estimated remaining error must be below:
-    /// `max(SETTLE · tolerance, 8ε)` ([`crate::newton::SETTLE`]; not below the rounding floor
+    /// `max(SETTLE · tolerance, 8ε)` ([`crate::convergence::SETTLE`]; not below the rounding floor
     /// of the precision, which `f32` reaches first: 9.5e-7).
     pub(crate) settle: T,
-    /// [`crate::newton::SLOW`] in the scalar.
+    /// [`crate::convergence::SLOW`] in the scalar.
     pub(crate) slow: T,
     /// The generalized-α recursion's constants (`None`: Newmark).
-    pub(crate) alpha: Option<crate::newmark::AlphaRecursion<T>>,
+    pub(crate) alpha: Option<crate::scheme::AlphaRecursion<T>>,
     /// What the scene adds: loads, per-element sections (`()` for the paper's scenes).
     pub(crate) data: S::Data<T, N>,
     /// Where a restart puts the model (computed with the static equilibrium).
@@ -136,7 +136,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             pivot_ratio: lit(PIVOT_RATIO),
             max_step: lit(MAX_STEP),
             settle: {
-                let want = lit::<T>(crate::newton::SETTLE) * params.integrator.tolerance;
+                let want = lit::<T>(crate::convergence::SETTLE) * params.integrator.tolerance;
                 let floor = T::default_epsilon() * lit(8.0);
                 if want > floor {
                     want
@@ -144,8 +144,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                     floor
                 }
             },
-            slow: lit(crate::newton::SLOW),
-            alpha: crate::newmark::AlphaRecursion::of(&params.integrator),
+            slow: lit(crate::convergence::SLOW),
+            alpha: crate::scheme::AlphaRecursion::of(&params.integrator),
             rest: Rest {
                 q: SVector::zeros(),
                 a0: SVector::zeros(),

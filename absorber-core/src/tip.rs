@@ -33,6 +33,7 @@ use crate::dual::{Dual, Number, Plain};
 use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::BallKind;
+pub use crate::scheme::Chain;
 
 /// Local coordinates: end-node displacement (x, y), slope displacement (x, y), ball spin φ.
 pub const LOCAL: usize = 5;
@@ -123,18 +124,6 @@ pub struct LocalState<T> {
     pub v: [T; LOCAL],
     /// Accelerations.
     pub a: [T; LOCAL],
-}
-
-/// Newmark chain coefficients of the unknown `x`: `q = q₀ + c_q x`, `v = v₀ + c_v x`,
-/// `a = a₀ + c_m x`.
-#[derive(Clone, Copy, Debug)]
-pub struct Chain<T> {
-    /// ∂q/∂x.
-    pub c_q: T,
-    /// ∂v/∂x.
-    pub c_v: T,
-    /// ∂a/∂x.
-    pub c_m: T,
 }
 
 /// Tip rotation kinematics: ψ, ψ̇, ψ̈, its gradient j and (cos ψ, sin ψ) = (a₃, a₄)/|a|

@@ -37,10 +37,11 @@
 
 use crate::error::Error;
 use crate::loads::{Loads, MAX_LOAD};
-use crate::model::{Model, State, StepReport};
+use crate::model::Model;
 use crate::monitor::stress::{root_reaction_moment, RootSection};
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
+use crate::state::{State, StepReport};
 use nalgebra::SVector;
 
 /// The constant gain of an [`Estimator`] and the steady-state uncertainty it implies.

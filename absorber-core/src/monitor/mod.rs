@@ -59,10 +59,11 @@ pub use stress::{
 
 use crate::energy::Heights;
 use crate::error::Error;
-use crate::model::{Model, StepReport};
+use crate::model::Model;
 use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::{LockedBall, Scene};
+use crate::state::StepReport;
 
 /// A model advanced beside the monitored one on the same input, for comparison.
 pub trait Twin<T: Real> {
