@@ -116,8 +116,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// to it (a ball beyond the stops may roll past the top, where θ − ψ leaves `(−π, π]`).
     pub(crate) fn branch_angles(&self, a: &State<T, D>, b: &State<T, D>) -> (T, T) {
         let (raw0, raw1) = (self.relative_angle(a), self.relative_angle(b));
-        let a0 = crate::flight::wrap(raw0);
-        (a0, a0 + crate::flight::wrap(raw1 - raw0))
+        let a0 = crate::flight::roots::wrap(raw0);
+        (a0, a0 + crate::flight::roots::wrap(raw1 - raw0))
     }
 
     /// Splits a step that crossed a stop (module doc), from the span between the stops
@@ -155,7 +155,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 Side::Negative
             };
             let target = side.sign::<T>() * stop;
-            tau = crate::flight::hermite_root(
+            tau = crate::flight::roots::hermite_root(
                 a0 - target,
                 self.relative_rate(start) * h,
                 a1 - target,
@@ -193,7 +193,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// interpolant, error O(h²), misplaces the ball by ~α̈h²/8, which the projection onto the
     /// stop then turns into a potential-energy error).
     fn crossing_fraction(&self, start: &State<T, D>, end: &State<T, D>, h: T, target: T) -> T {
-        crate::flight::hermite_root(
+        crate::flight::roots::hermite_root(
             self.relative_angle(start) - target,
             self.relative_rate(start) * h,
             self.relative_angle(end) - target,
