@@ -5,7 +5,7 @@
 //! the beam end (the signal head's aerodynamic force, or a truck gust on it) and a vertical line
 //! load on each element (wind on the arm). Positive up \[N, N/m\]. They enter the equations of
 //! motion as generalized forces, `r = … − Q_ext`, with the line load's integral
-//! [`crate::ancf::Element::line_load_force`] (the full solver calls the same function) and the
+//! [`crate::step::ancf::Element::line_load_force`] (the full solver calls the same function) and the
 //! tip force on the end node's `r₂`.
 //!
 //! **Real arms** ([`ArmParams`]): a tapered steel tube (outer diameter linear from root to tip,
@@ -23,11 +23,11 @@
 //! hold at the end of the step, where Newmark's equations hold, like the base acceleration); a
 //! plain `step` on a loaded scene keeps the last loads.
 
-use crate::ancf::{shape, Element, ElementVector};
-use crate::beam::Beam;
 use crate::error::Error;
 use crate::params::{BeamParams, Calibration};
 use crate::scalar::{is_positive, lit, Real};
+use crate::step::ancf::{shape, Element, ElementVector};
+use crate::step::beam::Beam;
 use core::fmt::Debug;
 
 /// Largest |load| accepted per sample: tip force in N, line load in N/m (a 1 MN force on a
@@ -183,7 +183,7 @@ impl<T: Real> ArmParams<T> {
         let x0 = l * lit::<T>(k as f64);
         let (mut area, mut compliance) = (T::zero(), T::zero());
         let g = calibration.bending_gradient;
-        for (xi, w) in crate::ancf::GAUSS5 {
+        for (xi, w) in crate::step::ancf::GAUSS5 {
             let x = x0 + l * lit::<T>(xi);
             let (a, mut i) = self.section_at(x, beam.length);
             if g != T::zero() {
@@ -234,7 +234,7 @@ impl<T: Real> ArmParams<T> {
     /// Total mass of the tube and point masses \[kg\] (Gauss over the taper).
     pub fn total_mass(&self, length: T) -> T {
         let mut area = T::zero();
-        for (xi, w) in crate::ancf::GAUSS5 {
+        for (xi, w) in crate::step::ancf::GAUSS5 {
             area += lit::<T>(w) * self.section_at(length * lit::<T>(xi), length).0;
         }
         let points = self

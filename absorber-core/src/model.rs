@@ -1,29 +1,18 @@
-//! The model: its state, and one step read top to bottom ([`Model::step`]).
-//!
-//! A step is: the Newmark predictor and Newton corrector over the whole step
-//! ([`crate::newmark`], [`crate::newton`]), then the stop events — an impact splits the step at
-//! the crossing, a held ball is released when the stop would pull it ([`crate::stops`]) —, then
-//! the clock. Every expensive operation of the step is charged to its work cap
-//! ([`crate::newton::work`]), and a step that could not finish within it is flagged or fails;
-//! a run of such steps makes the model restart itself ([`Model::step`], "Recovery"). The
-//! equations themselves are in [`crate::system`] (beam, tip body, ball), the
-//! static solve and the start of a run in [`crate::statics`], the linear algebra in
-//! [`crate::linalg`]. The Newton matrices live in the model ([`crate::newton::Workspace`]),
-//! not on the stack.
+//! The model: its state and parameters, its start, and one step ([`Model::step`]): the input
+//! checked, the step run by the machinery of `step/` (its `mod.rs` lays the step out top to
+//! bottom), and the restart rule ("Recovery") applied to a run of failed or capped steps. Every
+//! expensive operation of the step is charged to its work cap ([`crate::work`]). The Newton
+//! matrices live in the model ([`crate::Workspace`]), not on the stack.
 
 use crate::error::Error;
-use crate::newton::Workspace;
 use crate::params::Params;
 use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
 use crate::state::{units, Contact, EventCounts, Outcome, State, StepReport, RESTART_AFTER};
-use crate::system::System;
-use crate::tip::LocalState;
+use crate::step::newton::Workspace;
+use crate::step::system::System;
+use crate::step::tip::LocalState;
 use nalgebra::SVector;
-
-pub use crate::convergence::{DAMPING_TRIALS, MAX_STEP};
-pub use crate::error::{END_BEYOND_STOP, START_BEYOND_STOP};
-pub use crate::state::MAX_BASE_ACCEL;
 
 /// The reduced model of scene `S` with `N` elements and `D = 4N + S::EXTRA_DOFS` unknowns.
 #[derive(Clone, Debug)]
@@ -168,7 +157,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 flight: crate::state::Flight::zero(),
             },
             work: Workspace::default(),
-            max_input: crate::scalar::lit(MAX_BASE_ACCEL),
+            max_input: crate::scalar::lit(crate::state::MAX_BASE_ACCEL),
             recovery: Recovery::default(),
         }
     }
@@ -245,7 +234,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         Ok(iterations)
     }
 
-    /// Computes where a restart puts the model ([`crate::system::Rest`]): the start of [`Model::restart`] at
+    /// Computes where a restart puts the model ([`crate::step::system::Rest`]): the start of [`Model::restart`] at
     /// two inputs, 0 and 100 m/s², whose accelerations give `a₀` and `a₁`. Without a possible
     /// start (the ball beyond a stop) the model has no restart state.
     fn prepare_rest(&mut self) {
@@ -332,9 +321,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// (the acceleration of the base, measured, positive up).
     ///
     /// **Work.** The step does at most [`crate::Integrator::max_work`] units of work
-    /// ([`crate::newton::work`]). A Newton solve that reaches the cap stops with its iterate:
+    /// ([`crate::work`]). A Newton solve that reaches the cap stops with its iterate:
     /// the step is taken and flagged [`Outcome::Capped`]. A step that would restart the model
-    /// (below) runs with [`crate::newton::work::RESTART`] units less, the restart's own.
+    /// (below) runs with [`crate::work::RESTART`] units less, the restart's own.
     ///
     /// **Errors.** On error the state is left exactly as it was, and so is everything that
     /// influences later steps (modified Newton's kept matrix included). An input that is not
@@ -358,8 +347,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             // This step restarts the model if it fails or is capped far: the restart's work is
             // reserved (the cap is then met by the restart step too).
             cap = cap
-                .saturating_sub(crate::newton::work::RESTART)
-                .max(crate::newton::work::MIN_CAP);
+                .saturating_sub(crate::work::RESTART)
+                .max(crate::work::MIN_CAP);
         }
         let in_flight = self.state.contact == Contact::InFlight;
         self.work
@@ -501,102 +490,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     }
 }
 
-impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
-    /// One step from `state` to the input `base_accel` at its end: `state` becomes the next
-    /// state and the report is returned, or an error (then `state` is unchanged, and nothing
-    /// else is but the workspace's scratch).
-    fn advance(
-        &self,
-        state: &mut State<T, D>,
-        base_accel: T,
-        ws: &mut Workspace<T, D>,
-    ) -> Result<StepReport<T>, Error> {
-        let h = self.params.integrator.step;
-        let start = &*state;
-        // 0. The work the step's event tests take whatever happens (no loop in them): the
-        //    flying ball's tests against the circle and the stops, the release test of a ball
-        //    on a stop (a residual); charged first, so that the solves have that much less.
-        ws.charge_fixed(match start.contact {
-            Contact::InFlight if S::FLIGHT => crate::newton::work::FLIGHT_TESTS,
-            Contact::OnStop(_) => crate::newton::work::RESIDUAL,
-            _ => 0,
-        });
-        // 1. Newmark over the whole step (the ball keeps its contact, on the track or flying).
-        let mut next = *start;
-        let solved = self.newmark(
-            start,
-            h,
-            base_accel,
-            ws,
-            self.params.integrator.newton,
-            &mut next,
-        )?;
-        let mut report = StepReport {
-            iterations: solved.iterations,
-            increment: solved.increment,
-            impact: None,
-            separation: None,
-            landing: None,
-            work: 0,
-            outcome: Outcome::Converged,
-            events: EventCounts::default(),
-        };
-        // An event the work cap cannot afford (a plastic landing's own matrix) leaves the state
-        // as the event code found it, consistent, and waits for the next step (`waits`).
-        if S::FLIGHT && start.contact == Contact::InFlight {
-            // 2'. In flight: a landing or a stop splits the step at the crossing.
-            let r = self.flight_events(start, &mut next, base_accel, ws, &mut report);
-            waits(ws, r)?;
-        } else {
-            // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
-            let r = self.stop_events(start, &mut next, base_accel, ws, &mut report);
-            waits(ws, r)?;
-            // 3. Separation: a track that would pull the ball lets it fly (after a stop impact,
-            // at the step's end: `separation` says how).
-            if self.flies() {
-                let r = self.separation(start, &mut next, base_accel, ws, &mut report);
-                waits(ws, r)?;
-            }
-        }
-        // A flight counts as a separation once it is higher than `ball.lift_height`.
-        if S::FLIGHT {
-            self.note_gap(&mut next, &mut report);
-        }
-        // 4. The clock: whole steps times h (a running sum of h drifts in f32).
-        next.steps = start.steps.saturating_add(1);
-        next.time = T::from_count(next.steps) * h;
-        Self::is_finite(&next)?;
-        if ws.capped() && self.params.integrator.at_cap == crate::params::AtCap::Keep {
-            // A capped step whose iterate is not to be taken: the state as before, an error.
-            return Err(Error::WorkCap);
-        }
-        *state = next;
-        Ok(report)
-    }
-}
-
-/// An event's result: one the work cap could not afford flags the step and waits for the next.
-#[inline(always)]
-fn waits<T: Real, const D: usize>(
-    ws: &mut Workspace<T, D>,
-    r: Result<(), Error>,
-) -> Result<(), Error> {
-    match r {
-        Err(Error::WorkCap) => {
-            ws.flag_capped();
-            Ok(())
-        }
-        r => r,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::params::ImpactModel;
     use crate::scene::{FreeBall, LockedBall};
     use crate::state::Side;
-    use crate::tip::{self, Chain};
+    use crate::step::scheme::Chain;
+    use crate::step::tip;
 
     /// The assembled Newton matrix is the exact derivative of the residual along the Newmark
     /// chain (central differences, relative 1e-6), at a deformed, fast-moving state, for every
@@ -626,7 +527,7 @@ mod tests {
         for i in 0..D {
             for j in 0..D {
                 assert!(
-                    crate::linalg::in_envelope(i, j) || jac[(i, j)] == 0.0,
+                    crate::step::linalg::in_envelope(i, j) || jac[(i, j)] == 0.0,
                     "J[{i},{j}] = {} outside the node envelope",
                     jac[(i, j)]
                 );

@@ -10,8 +10,8 @@ use crate::error::Error;
 use crate::model::Model;
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
-use crate::scheme::Chain;
 use crate::state::Contact;
+use crate::step::scheme::Chain;
 use nalgebra::{SMatrix, SVector};
 
 /// Eigenvalues of a symmetric matrix by cyclic Jacobi, ascending.

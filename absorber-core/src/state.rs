@@ -16,11 +16,11 @@ pub enum Contact {
     Off,
     /// Ball resting on the stop at `+φ_max` (`Positive`) or `−φ_max` (`Negative`).
     OnStop(Side),
-    /// Ball in flight inside the housing ([`crate::flight`]; its centre is the state's
+    /// Ball in flight inside the housing ([`crate::step::flight`]; its centre is the state's
     /// [`State::flight`]).
     InFlight,
     /// Ball rolling on the arc beyond the stops: it flew over one and landed there
-    /// ([`crate::flight`]); the stops act on it from their other face.
+    /// ([`crate::step::flight`]); the stops act on it from their other face.
     Beyond,
 }
 
@@ -132,7 +132,7 @@ pub(crate) fn units(used: u32) -> u16 {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EventCounts {
     /// Take-offs from the track (with `ball.lift_height` > 0: flights, once they rise above
-    /// it; [`crate::flight`], "Counted").
+    /// it; [`crate::step::flight`], "Counted").
     pub separations: u8,
     /// Landings on the track (bounces and rolling landings; with `ball.lift_height` > 0, of
     /// the counted flights).
@@ -156,9 +156,9 @@ pub struct StepReport<T> {
     pub separation: Option<T>,
     /// Landing on the track within the step, if any (the last one).
     pub landing: Option<Landing<T>>,
-    /// Work units the step used ([`crate::newton::work`]; at most
+    /// Work units the step used ([`crate::work`]; at most
     /// [`crate::Integrator::max_work`], and shown saturated at 65,535: the unlimited cap of
-    /// the host's default is [`crate::newton::work::UNLIMITED`], 50,000).
+    /// the host's default is [`crate::work::UNLIMITED`], 50,000).
     pub work: u16,
     /// Whether the step converged, was capped or restarted the model.
     pub outcome: Outcome,

@@ -57,7 +57,7 @@ pub fn base_accel(k: u32, h: f32, frequency: f32) -> f32 {
 pub fn firmware_params(setup: &Setup) -> Params<f32> {
     let mut p = Params::<f32>::default();
     p.integrator.events = EventLocation::StepEnd;
-    p.integrator.max_work = absorber_core::newton::work::DEADLINE;
+    p.integrator.max_work = absorber_core::work::DEADLINE;
     if let Some(e) = setup.stress.and_then(|s| s.restitution) {
         p.ball.restitution = e;
         p.ball.landing_restitution = e;
@@ -279,7 +279,7 @@ pub trait Config {
     /// The scene's work cap (`Integrator::max_work`): the work of the hardest step of its
     /// paper run plus the events' reserve, so that the paper's input is never capped
     /// (`docs/embedded.md`, "Work cap").
-    const MAX_WORK: u32 = absorber_core::newton::work::DEADLINE;
+    const MAX_WORK: u32 = absorber_core::work::DEADLINE;
     /// Applies the change (the cap is set after it).
     fn apply(p: &mut Params<f32>) {
         let _ = p;
@@ -293,14 +293,14 @@ pub struct Modified;
 impl Config for Modified {
     const NAME: &'static str = "modified Newton";
     /// Its hardest paper step takes 47 units (five iterations with the kept factors and a
-    /// refresh: `absorber_core::newton::KEPT_ITERATIONS`).
+    /// refresh: `absorber_core::shared::KEPT_ITERATIONS`).
     const MAX_WORK: u32 = 49;
     fn apply(p: &mut Params<f32>) {
         p.integrator.newton = absorber_core::NewtonKind::Modified;
     }
 }
 
-/// The work cap `W` (units) instead of [`absorber_core::newton::work::DEADLINE`], for a scene
+/// The work cap `W` (units) instead of [`absorber_core::work::DEADLINE`], for a scene
 /// whose hardest paper step takes `W − 2`: the beam only and the locked ball (23 units), the
 /// free ball on 6 elements (46); and for the ball held on the track, 47 (its hardest paper step
 /// converges in 41 units instead of 46, with the factors in hand: `fw-free-rolling`).
@@ -773,7 +773,7 @@ pub fn run<M: Sim, W: Write, P: Probe>(
     }
     let _ = writeln!(out, "static tip={}", F(m.static_tip()));
     {
-        use absorber_core::newton::work as w;
+        use absorber_core::work as w;
         let _ = writeln!(
             out,
             "work cap={} refresh={} residual={} solve={} fallback={}",

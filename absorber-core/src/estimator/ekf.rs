@@ -2,7 +2,7 @@
 //! that step's exact sensitivity, in the error subspace of the model's lowest modes.
 //!
 //! **Filter state.** The step from `n` to `n + 1` depends on the state only through the
-//! Newmark predictor `p_n = (q*, v*, b)` (module doc of [`crate::newmark`]: `q* = q + h v +
+//! Newmark predictor `p_n = (q*, v*, b)` (module doc of [`crate::step::newmark`]: `q* = q + h v +
 //! h²(½ − β) ā + βh² b`, `v* = v + h(1 − γ) ā + γh b`, `b = f_a q̈ + f_p ā`, zero for Newmark),
 //! the tip load `P_{n+1}` of the step and the sensor biases. Its error lives in the span of
 //! the `M` lowest modes `Φ` ([`super::basis`]): `δq* = Φ η_q`, `δv* = Φ η_v`, `δb = Φ η_b`
@@ -43,17 +43,18 @@ use super::basis::ModalBasis;
 use super::health::{Health, HealthConfig, Verdict};
 use super::sensors::{ReadingUse, Readings, SensorKind, SensorSet, KINDS};
 use super::ud::{bierman_f, column, quadratic, quadratic_f, row_of, set_column, thornton};
-use crate::ancf::TangentBlocks;
 use crate::error::Error;
-use crate::linalg::BandMatrix;
 use crate::loads::{Loads, MAX_LOAD};
 use crate::model::Model;
 use crate::monitor::stress::{root_reaction_moment, static_root_moment, RootSection};
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::{BallKind, Scene};
 use crate::state::{Contact, StepReport};
-use crate::system::Problem;
-use crate::tip::{self, Chain};
+use crate::step::ancf::TangentBlocks;
+use crate::step::linalg::BandMatrix;
+use crate::step::scheme::Chain;
+use crate::step::system::Problem;
+use crate::step::tip;
 use nalgebra::{SMatrix, SVector};
 
 /// Slots after the modal errors: the load, its rate and its running mean, then one bias per
@@ -529,7 +530,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
         g_eff: T,
     ) -> [SVector<T, D>; 3] {
         let (b, _) = model.sys.element_and_force(0, g_eff);
-        let u = crate::beam::gather(q, 0);
+        let u = crate::step::beam::gather(q, 0);
         let mut block = [[T::zero(); 8]; 8];
         let zero4 = [[T::zero(); 4]; 4];
         let (_, tangent) = b
@@ -539,7 +540,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     }
 
     /// [`Ekf::stress_gradients`] from element 0's axial tangent blocks at that configuration
-    /// (the `∂r/∂q` assembly's, [`crate::system::System::jacobian`]).
+    /// (the `∂r/∂q` assembly's, [`crate::step::system::System::jacobian`]).
     fn stress_gradients_of(
         &self,
         model: &Model<T, S, N, D>,

@@ -1,4 +1,4 @@
-//! The Newton solve's limits (the solve itself: [`crate::newton`]): the trust radius of a
+//! The Newton solve's limits (the solve itself: [`crate::step::newton`]): the trust radius of a
 //! correction, the damping trials of an iteration, when a reused matrix has converged or must be
 //! refreshed, and how long factors kept from an earlier step may be reused.
 

@@ -6,7 +6,7 @@
 //! effective gravity `g_eff = g + ÿ_b`. `A` is the beam end (the track's centre), `ψ` the tip
 //! rotation, `ρ = R − r_b` the radius of the ball centre's circle, `R_tr = ρ + r_b`.
 //!
-//! **On the track** the ball rolls (the model of [`crate::tip`]): `c − A = ρ (sin θ, −cos θ)`,
+//! **On the track** the ball rolls (the model of [`crate::step::tip`]): `c − A = ρ (sin θ, −cos θ)`,
 //! and the track's normal force on it, positive towards `A`, is
 //! `N = m_b [−ẍ_A sin θ + (ÿ_A + g_eff) cos θ + ρ θ̇²]` ([`crate::ContactForces`]).
 //!
@@ -53,13 +53,13 @@
 //! kept in flight; the crossing is detected when the ball is at the stops' height at both ends
 //! of a step, from either face. Nearer the centre the ball flies over the stops, onto the arc
 //! beyond them, where it may land and roll like on the track (the stops then act on it from
-//! their other face, [`crate::stops`]).
+//! their other face, [`crate::step::stops`]).
 //!
 //! Impulses use the stops' metric ([`crate::ImpactModel`]): the step's Newmark matrix by default
 //! (an impulse in the mass-matrix metric kicks the housing's stiff end-rotation mode; a stop's
 //! with its own contact time when `ball.stop_contact_time` is set), the mass matrix for an
 //! instantaneous impact. A perfectly elastic ball's impulses keep the kinetic energy in either
-//! metric ([`crate::stops`]), and it has every event of a step split at its crossing
+//! metric ([`crate::step::stops`]), and it has every event of a step split at its crossing
 //! ([`System::perfectly_elastic`]; docs/model.md, "Elastic bounces at the paper's step").
 //! After an impulse the accelerations go on from before it
 //! ([`System::after_impulse`]); a take-off and a rolling landing (a change of mode) restart from
@@ -80,9 +80,3 @@ mod stops;
 
 #[cfg(test)]
 mod tests;
-
-pub use crate::state::{Flight, Landing};
-pub use roots::{
-    bounce_impulse, hermite_rate, hermite_root, landing_bounces, polar_angle, separation_fraction,
-    GRAZING,
-};

@@ -3,13 +3,13 @@
 
 use super::roots::{bounce_impulse, landing_bounces, polar_angle, wrap, GRAZING};
 use crate::error::Error;
-use crate::newton::Workspace;
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
 use crate::state::Landing;
 use crate::state::{Contact, State, StepReport};
-use crate::system::System;
-use crate::tip;
+use crate::step::newton::Workspace;
+use crate::step::system::System;
+use crate::step::tip;
 use nalgebra::SVector;
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
@@ -110,7 +110,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                     .mass_products(s, Contact::InFlight, &mut y, ws)
                     .and_then(|(uy, yy)| {
                         let b = uy - (n[0] * before[0] + n[1] * before[1]);
-                        crate::stops::energy_exact_impulse(
+                        crate::step::stops::energy_exact_impulse(
                             -normal_speed,
                             b,
                             T::one() / ball.mass + yy,
@@ -129,7 +129,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         } else {
             // The rolling metric costs a refresh: unaffordable, the landing waits (the state
             // is not touched further; docs/embedded.md, "Work cap").
-            if !ws.affords(crate::newton::work::REFRESH + crate::newton::work::SOLVE, 0) {
+            if !ws.affords(crate::work::REFRESH + crate::work::SOLVE, 0) {
                 return Err(Error::WorkCap);
             }
             // θ on the branch of ψ, and φ re-based so that r_b φ = R_tr ψ − ρ θ.

@@ -7,8 +7,8 @@ use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
 use crate::state::Flight;
 use crate::state::{Contact, Side, State};
-use crate::system::System;
-use crate::tip;
+use crate::step::system::System;
+use crate::step::tip;
 use nalgebra::SVector;
 
 /// A flying ball whose polar angle starts a step this close beyond a stop \[rad\], moving

@@ -2,12 +2,12 @@
 //! restitution, and a ball put back at rest on a stop.
 
 use crate::error::Error;
-use crate::newton::Workspace;
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
 use crate::state::{Contact, Impact, Side, State, StepReport};
-use crate::system::System;
-use crate::tip;
+use crate::step::newton::Workspace;
+use crate::step::system::System;
+use crate::step::tip;
 use nalgebra::SVector;
 
 /// A perfectly elastic flying ball ([`System::perfectly_elastic`]) that hits a stop from the
@@ -101,7 +101,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                     .and_then(|(uy, yy)| {
                         let b = uy + (cos * v[0] + sin * v[1]) / rel.r;
                         let c = T::one() / (ball.mass * rel.r * rel.r) + yy;
-                        crate::stops::energy_exact_impulse(speed, b, c)
+                        crate::step::stops::energy_exact_impulse(speed, b, c)
                     })
                 {
                     lambda = l;
@@ -157,7 +157,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         end.a = acc.x;
         end.pseudo_accel = end.a;
         // (The release test's residual is charged to the work cap; unaffordable, released.)
-        if !ws.afford_event(crate::newton::work::RESIDUAL)
+        if !ws.afford_event(crate::work::RESIDUAL)
             || side.sign::<T>() * self.contact_force(end) > T::zero()
         {
             end.contact = Contact::Off;

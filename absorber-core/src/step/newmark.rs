@@ -1,6 +1,6 @@
 //! Newmark's method (paper §4, eqs. 29–31) and its generalization, the generalized-α scheme
 //! (Chung & Hulbert 1993, in the form of Arnold & Brüls 2007): predictor, and the corrector
-//! solved for the new acceleration by Newton ([`crate::newton`]).
+//! solved for the new acceleration by Newton ([`crate::step::newton`]).
 //!
 //! With `x = q̈_{n+1}` the unknown and `a` the acceleration-like variable of the scheme
 //! (`a = q̈` for Newmark):
@@ -13,14 +13,14 @@
 //! Newmark's method (`α_m = α_f = 0`: `b = 0`, `κ = 1`; that path never touches `b`).
 
 use crate::error::Error;
-use crate::newton::{Solved, Workspace};
 use crate::params::NewtonKind;
 use crate::scalar::{lit, Real};
 use crate::scene::Scene;
-pub use crate::scheme::AlphaRecursion;
-use crate::scheme::Chain;
 use crate::state::{State, StepReport};
-use crate::system::{Problem, System};
+use crate::step::newton::{Solved, Workspace};
+use crate::step::scheme::AlphaRecursion;
+use crate::step::scheme::Chain;
+use crate::step::system::{Problem, System};
 use nalgebra::SVector;
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {

@@ -1,9 +1,9 @@
-use super::*;
+use super::roots::{bounce_impulse, hermite_root, landing_bounces, separation_fraction};
 
-use crate::newton::Workspace;
 use crate::state::{Contact, Side, State, StepReport};
-use crate::system::System;
-use crate::tip;
+use crate::step::newton::Workspace;
+use crate::step::system::System;
+use crate::step::tip;
 use crate::{FreeBall, ImpactModel, Model, Params};
 use nalgebra::SVector;
 
@@ -111,7 +111,7 @@ fn empty_report() -> StepReport<f64> {
 /// here h = 3 ms) keep the kinetic energy to rounding (1e-12 of it): a landing, and a stop
 /// hit in flight from the track's side and from beyond, on a moving housing. The impulse
 /// along the metric's direction is the one that conserves it
-/// ([`crate::stops::energy_exact_impulse`]); the kinematic law of the other restitutions
+/// ([`crate::step::stops::energy_exact_impulse`]); the kinematic law of the other restitutions
 /// (the normal or angular rate reversed exactly in that metric) changed it (measured
 /// below). The rebound then differs from the reversed rate by the housing's velocity in
 /// the modes the metric holds back (its stiff modes, here moving at random); on a housing
@@ -232,7 +232,7 @@ fn a_bounce_on_a_stiff_housing_hands_it_a_third_of_the_energy_if_instantaneous()
         if model == ImpactModel::Instantaneous {
             let z = SVector::<f64, 13>::zeros();
             let matrix = |q: &SVector<f64, 13>, c_q: f64, c_m: f64| {
-                let ch = crate::scheme::Chain { c_q, c_v: 0.0, c_m };
+                let ch = crate::step::scheme::Chain { c_q, c_v: 0.0, c_m };
                 let (_, j, _) = m
                     .sys
                     .assemble(q, &z, &z, p.gravity, &ch, Contact::InFlight, false);

@@ -4,11 +4,11 @@
 use super::geometry::Relative;
 use super::roots::{hermite_rate, hermite_root, wrap};
 use crate::error::Error;
-use crate::newton::Workspace;
 use crate::scalar::{is_positive, Real};
 use crate::scene::Scene;
 use crate::state::{Contact, Side, State, StepReport};
-use crate::system::System;
+use crate::step::newton::Workspace;
+use crate::step::system::System;
 
 /// Events split at their crossings in the rest of one flight step of a perfectly elastic ball
 /// ([`System::perfectly_elastic`]), beyond the step's first.
@@ -95,7 +95,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// and `ball.landing_restitution` 1 if it may fly), its events at their crossings (with
     /// events at the step end every event is late, and the kinematic law and its cost stay: the
     /// firmware, which runs them so, is unchanged). Its impulses keep the kinetic energy
-    /// exactly in either metric ([`crate::stops`]), and every event of its flight steps is split
+    /// exactly in either metric ([`crate::step::stops`]), and every event of its flight steps is split
     /// at its crossing (up to [`MAX_SPLITS`]), so that none is applied late. A late event acts
     /// where the ball has gone on beyond the circle or the stop line for the rest of the step,
     /// and its projection back moves the ball by up to its speed times the step: with

@@ -3,12 +3,12 @@
 
 use super::roots::separation_fraction;
 use crate::error::Error;
-use crate::newton::Workspace;
 use crate::scalar::{is_positive, Real};
 use crate::scene::Scene;
 use crate::state::Flight;
 use crate::state::{Contact, State, StepReport};
-use crate::system::System;
+use crate::step::newton::Workspace;
+use crate::step::system::System;
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The ball leaves the track if the step from `start` to `next` (rolling, no stop impact)

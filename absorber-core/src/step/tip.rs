@@ -29,11 +29,11 @@
 //! Everything is evaluated in [`Dual`] arithmetic seeded with the Newmark chain coefficients,
 //! so one pass gives the residual and its exact Jacobian `c_m ∂r/∂ä + c_v ∂r/∂ȧ + c_q ∂r/∂q`.
 
-use crate::dual::{Dual, Number, Plain};
 use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::BallKind;
-pub use crate::scheme::Chain;
+use crate::step::dual::{Dual, Number, Plain};
+use crate::step::scheme::Chain;
 
 /// Local coordinates: end-node displacement (x, y), slope displacement (x, y), ball spin φ.
 pub const LOCAL: usize = 5;
@@ -50,7 +50,7 @@ pub enum BallMode<T> {
     /// Ball free: its spin φ is an unknown.
     Free,
     /// Ball in flight: gone from the housing (the tip rows use the tip body's inertia alone)
-    /// and its spin φ torque-free, row 4 = φ̈ ([`crate::flight`]).
+    /// and its spin φ torque-free, row 4 = φ̈ ([`crate::step::flight`]).
     Flying,
     /// Static solve of a free ball: φ is an unknown pinned by row 4 to the plumb position
     /// θ = 0 (an equilibrium for any gravity, the only stable one for g > 0; with g = 0 the

@@ -40,15 +40,15 @@
 //! ([`Workspace::commit`]), so a rejected sample leaves every later step bit for bit as if it
 //! had never been offered.
 
-pub use crate::convergence::{DAMPING_TRIALS, KEPT_ITERATIONS, MAX_STEP, SETTLE, SLOW};
 use crate::error::Error;
-use crate::linalg::{self, BandMatrix};
 use crate::params::NewtonKind;
 use crate::scalar::{is_positive, lit, to_f64, Real};
 use crate::scene::Scene;
 use crate::state::Contact;
-use crate::system::{Problem, System};
-pub use crate::work;
+use crate::step::convergence::{DAMPING_TRIALS, KEPT_ITERATIONS};
+use crate::step::linalg::{self, BandMatrix};
+use crate::step::system::{Problem, System};
+use crate::work;
 use nalgebra::{SMatrix, SVector};
 
 /// What a factored matrix was built for.
