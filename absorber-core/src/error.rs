@@ -17,7 +17,7 @@ pub enum Error {
     },
     /// The step input (base acceleration) is NaN or infinite. The state is unchanged.
     NonFiniteInput,
-    /// The step input is finite but beyond [`crate::state::MAX_BASE_ACCEL`] (a sensor or wiring
+    /// The step input is finite but beyond [`crate::MAX_BASE_ACCEL`] (a sensor or wiring
     /// fault, not a motion the model can represent). The state is unchanged.
     InputOutOfRange,
     /// Newton did not reach the tolerance within the iteration budget. The state is unchanged.

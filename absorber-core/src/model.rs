@@ -234,7 +234,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         Ok(iterations)
     }
 
-    /// Computes where a restart puts the model ([`crate::step::system::Rest`]): the start of [`Model::restart`] at
+    /// Computes where a restart puts the model (`system::Rest`): the start of [`Model::restart`] at
     /// two inputs, 0 and 100 m/s², whose accelerations give `a₀` and `a₁`. Without a possible
     /// start (the ball beyond a stop) the model has no restart state.
     fn prepare_rest(&mut self) {

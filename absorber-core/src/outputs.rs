@@ -145,7 +145,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         Some(ContactForces { normal, tangential })
     }
 
-    /// The ball flies inside the housing ([`crate::step::flight`]).
+    /// The ball flies inside the housing (`flight`).
     pub fn in_flight(&self) -> bool {
         self.state.contact == Contact::InFlight
     }

@@ -16,11 +16,11 @@ pub enum Contact {
     Off,
     /// Ball resting on the stop at `+φ_max` (`Positive`) or `−φ_max` (`Negative`).
     OnStop(Side),
-    /// Ball in flight inside the housing ([`crate::step::flight`]; its centre is the state's
+    /// Ball in flight inside the housing (`flight`; its centre is the state's
     /// [`State::flight`]).
     InFlight,
     /// Ball rolling on the arc beyond the stops: it flew over one and landed there
-    /// ([`crate::step::flight`]); the stops act on it from their other face.
+    /// (`flight`); the stops act on it from their other face.
     Beyond,
 }
 
@@ -113,10 +113,10 @@ pub enum Outcome {
 }
 
 /// Failed steps, or steps capped far from convergence, in a row after which a step restarts the
-/// model ([`Model::step`]).
+/// model ([`crate::Model::step`]).
 pub const RESTART_AFTER: u32 = 3;
 /// A capped step whose last Newton correction is at most this many tolerances is near
-/// convergence: it ends a run of failed steps instead of extending it ([`Model::step`]).
+/// convergence: it ends a run of failed steps instead of extending it ([`crate::Model::step`]).
 pub const RESTART_INCREMENT: f64 = 100.0;
 
 /// Work units as reported ([`StepReport::work`]): saturated at `u16::MAX`.
@@ -132,7 +132,7 @@ pub(crate) fn units(used: u32) -> u16 {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EventCounts {
     /// Take-offs from the track (with `ball.lift_height` > 0: flights, once they rise above
-    /// it; [`crate::step::flight`], "Counted").
+    /// it; `flight`, "Counted").
     pub separations: u8,
     /// Landings on the track (bounces and rolling landings; with `ball.lift_height` > 0, of
     /// the counted flights).

@@ -12,7 +12,7 @@ pub const RESIDUAL: u32 = 5;
 /// An assembly of the residual and the Newton matrix, and its banded factorization.
 pub const REFRESH: u32 = 16;
 /// The pivoting fallback on top of a refresh: the assembly again and the dense LU with
-/// partial pivoting (`crate::step::linalg`). Only without a cap ([`UNLIMITED`]): under a cap a
+/// partial pivoting (`step::linalg`). Only without a cap ([`UNLIMITED`]): under a cap a
 /// matrix the banded LU refuses stops the solve at the cap instead.
 pub const FALLBACK: u32 = 32;
 /// Units the Newmark solves of a step leave to the events at its end: the back-substitutions

@@ -5,7 +5,7 @@
 //! the beam end (the signal head's aerodynamic force, or a truck gust on it) and a vertical line
 //! load on each element (wind on the arm). Positive up \[N, N/m\]. They enter the equations of
 //! motion as generalized forces, `r = … − Q_ext`, with the line load's integral
-//! [`crate::step::ancf::Element::line_load_force`] (the full solver calls the same function) and the
+//! `ancf::Element::line_load_force` (the full solver calls the same function) and the
 //! tip force on the end node's `r₂`.
 //!
 //! **Real arms** ([`ArmParams`]): a tapered steel tube (outer diameter linear from root to tip,

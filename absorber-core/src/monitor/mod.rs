@@ -201,7 +201,7 @@ pub struct Monitor<
     flight: FlightLog<T>,
 }
 
-/// What the ball's contact did (free-ball scenes; `crate::step::flight`): samples in flight,
+/// What the ball's contact did (free-ball scenes; `step::flight`): samples in flight,
 /// separations, landings and bounces, and the largest friction coefficient rolling needed, on
 /// the track (`|F_t|/N`, off the stops) and in a rolling landing (`|P_t|/P_n`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -3,7 +3,7 @@
 //! **Curvature.** At the clamp (x = 0 of element 0) the slope is fixed, r′ = (1, 0), so the
 //! signed curvature `κ = (r′ × r″) / |r′|³` reduces exactly to the component of
 //! `r″ = S_xx(0) u` normal to the root tangent: **κ = r″_y** \[1/m\]
-//! ([`crate::step::ancf::Element::curvature_vector`] of element 0 at ξ = 0). Positive κ is concave
+//! (`ancf::Element::curvature_vector` of element 0 at ξ = 0). Positive κ is concave
 //! up (sagging).
 //!
 //! **Moment** \[N·m\], sagging positive: gravity makes it negative (hogging) at the clamp of the

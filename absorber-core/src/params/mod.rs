@@ -64,7 +64,7 @@ pub struct BallParams<T> {
     /// model.
     pub stop_contact_time: T,
     /// The ball may leave the track when the track would have to pull it (normal force
-    /// `N < 0`), fly inside the housing and land again ([`crate::step::flight`]). `false`
+    /// `N < 0`), fly inside the housing and land again (`flight`). `false`
     /// keeps the bilateral track of the paper (the ball is held on its circle by any force),
     /// bit-identical to the rolling model. Only scenes whose type allows flight
     /// ([`crate::Scene::FLIGHT`]) read it. Default `true`.
@@ -75,7 +75,7 @@ pub struct BallParams<T> {
     pub landing_restitution: T,
     /// Shortest flight a bounce may start \[s\]: a landing whose rebound would fly for less
     /// (`2 e_n v_n / a_p`, pressed onto the track at `a_p`) is a rolling landing
-    /// ([`crate::step::flight::landing_bounces`]). 0 (the default) means the time step h, the
+    /// (`flight::landing_bounces`). 0 (the default) means the time step h, the
     /// shortest flight a step resolves: the number of bounces then grows as h shrinks (a
     /// bouncing ball's rebounds shorten geometrically). A fixed time makes the cut the same
     /// for every step not longer than it (3 ms: rebounds lower than about 10 µm at 1 g roll
@@ -240,7 +240,7 @@ impl<T: Real> Integrator<T> {
     }
 }
 
-/// Newton variant of the step solve (all converge to the same tolerance; `crate::step::newton`
+/// Newton variant of the step solve (all converge to the same tolerance; `step::newton`
 /// states the rule).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NewtonKind {
@@ -255,7 +255,7 @@ pub enum NewtonKind {
     /// Modified Newton: the factored Jacobian is kept across iterations and steps and rebuilt
     /// only when an iteration contracts by less than half, or the step length or the ball's
     /// contact changes, and at once in a step that starts with the ball in flight (where the
-    /// landings are, `crate::step::newton`). Iterations then cost a residual (no dual numbers, no axial tangent)
+    /// landings are, `step::newton`). Iterations then cost a residual (no dual numbers, no axial tangent)
     /// and a triangular solve. Convergence is linear but fast, because the Newton matrix
     /// `M + γhC + βh²K` changes little from step to step.
     Modified,

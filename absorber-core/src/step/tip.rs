@@ -50,7 +50,7 @@ pub enum BallMode<T> {
     /// Ball free: its spin φ is an unknown.
     Free,
     /// Ball in flight: gone from the housing (the tip rows use the tip body's inertia alone)
-    /// and its spin φ torque-free, row 4 = φ̈ ([`crate::step::flight`]).
+    /// and its spin φ torque-free, row 4 = φ̈ (`step::flight`).
     Flying,
     /// Static solve of a free ball: φ is an unknown pinned by row 4 to the plumb position
     /// θ = 0 (an equilibrium for any gravity, the only stable one for g > 0; with g = 0 the
@@ -240,7 +240,7 @@ pub fn gap_gradient<T: Real>(inertia: &TipInertia<T>, x: &LocalState<T>) -> [T; 
 }
 
 /// Residual rows of the tip body and ball on the local coordinates, with their Jacobian when
-/// `A` is a [`Dual`] (plain values with [`Plain`]).
+/// `A` is a `Dual` (plain values with `Plain`).
 ///
 /// Returns the five rows (value = generalized force, for duals `du[k]` = Jacobian entry along
 /// local direction k) and the value of `E_θ` (the generalized contact force the housing or stop

@@ -256,7 +256,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize, const M: usize, const X:
     }
 
     /// [`Ekf::stress_gradients`] from element 0's axial tangent blocks at that configuration
-    /// (the `∂r/∂q` assembly's, [`crate::step::system::System::jacobian`]).
+    /// (the `∂r/∂q` assembly's, `system::System::jacobian`).
     pub(super) fn stress_gradients_of(
         &self,
         model: &Model<T, S, N, D>,

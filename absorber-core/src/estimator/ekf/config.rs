@@ -45,7 +45,7 @@ pub struct EkfConfig<T, const M: usize> {
     /// or a release from a stop.
     pub ball_restart_sd: [T; 2],
     /// Time constant of the running RMS of the predicted measurements that scales the model
-    /// error ([`super::sensors::Sensor::model_error`]) \[s\].
+    /// error ([`crate::estimator::Sensor::model_error`]) \[s\].
     pub rms_time: T,
     /// The verdict's thresholds.
     pub health: HealthConfig<T>,
@@ -53,7 +53,7 @@ pub struct EkfConfig<T, const M: usize> {
     /// `gate` sd (0: none).
     pub gate: T,
     /// The reduced model's error around the ball's events, as `model_error` of every sensor
-    /// ([`super::sensors::Sensor::model_error`]): added while the model's ball is held on a
+    /// ([`crate::estimator::Sensor::model_error`]): added while the model's ball is held on a
     /// stop or flies, and for `event_window` samples after an impact, a separation, a
     /// landing or a release (the full solver and the reduced model put them at other
     /// instants; `docs/monitoring.md`, "Noise model").

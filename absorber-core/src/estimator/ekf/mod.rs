@@ -2,7 +2,7 @@
 //! that step's exact sensitivity, in the error subspace of the model's lowest modes.
 //!
 //! **Filter state.** The step from `n` to `n + 1` depends on the state only through the
-//! Newmark predictor `p_n = (q*, v*, b)` (module doc of [`crate::step::newmark`]: `q* = q + h v +
+//! Newmark predictor `p_n = (q*, v*, b)` (module doc of `newmark`: `q* = q + h v +
 //! h²(½ − β) ā + βh² b`, `v* = v + h(1 − γ) ā + γh b`, `b = f_a q̈ + f_p ā`, zero for Newmark),
 //! the tip load `P_{n+1}` of the step and the sensor biases. Its error lives in the span of
 //! the `M` lowest modes `Φ` ([`super::basis`]): `δq* = Φ η_q`, `δv* = Φ η_v`, `δb = Φ η_b`
