@@ -38,6 +38,6 @@ pub const DEADLINE: u32 = 48;
 /// The smallest cap a model accepts: the event tests of a step ([`FLIGHT_TESTS`] or a
 /// ball's release test, a residual), one refreshed Newton iteration and the reserve.
 pub const MIN_CAP: u32 = RESIDUAL + REFRESH + SOLVE + RESERVE;
-/// No cap (the default): about the work the iteration limits alone allowed before the cap
-/// existed (five solves of 100 iterations with 12 damping trials each).
+/// No cap (the default): about the work the iteration limits alone allow (five solves of 100
+/// iterations with 12 damping trials each).
 pub const UNLIMITED: u32 = 50_000;

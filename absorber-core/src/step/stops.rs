@@ -388,11 +388,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// the accelerations and the generalized-α variable go on from before it. The impulse is the
     /// nonsmooth part of the motion and leaves its smooth part (the accelerations) continuous,
     /// as in the nonsmooth generalized-α scheme (Brüls, Acary & Cardona 2014, *Comput. Methods
-    /// Appl. Mech. Eng.* 281:131). The consistent acceleration this code used to restart from
-    /// instead carries the stiff modes' instantaneous response to the jump (with
-    /// stiffness-proportional damping `c K Δq̇`: slope accelerations of 10⁶ s⁻² after a bounce of
-    /// 10⁻⁴ N·s), which the predictor of the rest of the step extrapolated over up to a whole
-    /// step: the beam end folded over and Newton failed (generalized-α, 16 elements, 3 ms;
+    /// Appl. Mech. Eng.* 281:131). A restart from the consistent acceleration would instead carry
+    /// the stiff modes' instantaneous response to the jump (with stiffness-proportional damping
+    /// `c K Δq̇`: slope accelerations of 10⁶ s⁻² after a bounce of 10⁻⁴ N·s), which the predictor
+    /// of the rest of the step extrapolates over up to a whole step: the beam end folds over and
+    /// Newton fails (generalized-α, 16 elements, 3 ms;
     /// docs/model.md, "Events and the integrator"). A flying ball's centre keeps its known
     /// acceleration `(0, −g_eff)`.
     pub(crate) fn after_impulse(&self, s: &mut State<T, D>) {

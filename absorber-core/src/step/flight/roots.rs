@@ -6,8 +6,8 @@ use crate::scalar::{is_positive, lit, Real};
 /// A ball meeting the circle slower than this along the normal \[m/s\] grazes it: no impulse,
 /// it flies on. A ball that took off at a step's end meets the circle again at the next step's
 /// start with a normal speed of rounding size and either sign; without the margin the two
-/// solvers took different branches there (a rolling landing with a normal impulse of rounding
-/// size, or none).
+/// solvers could take different branches there (a rolling landing with a normal impulse of
+/// rounding size, or none).
 pub const GRAZING: f64 = 1e-6;
 
 /// Fraction τ ∈ \[0, 1\] of a step at which the normal force, `n_start` at its start and
