@@ -569,7 +569,7 @@ if fb["stack_bound"] is not None:
 w("### The static work bound")
 w("")
 w("A step charges every expensive operation to its work cap before doing it "
-  "(`absorber_core::newton::work`: an assembly with its banded LU 16 units, a residual 5, a "
+  "(`absorber_core::work`: an assembly with its banded LU 16 units, a residual 5, a "
   "back-substitution 1; the pivoting fallback does not run under a cap), so no step does more "
   "than the cap's units, whatever the input. The plugin counts every call of the operations "
   "(`op=`: `System::residual_and_jacobian` and `BandMatrix::factor` for an assembly with its LU, "

@@ -56,11 +56,11 @@ count() {
 }
 
 # The operations the work cap counts (their instructions per call, per step).
-ops=(' absorber_core::system::System<T,S,_,_>::residual_and_jacobian$'
-    ' absorber_core::linalg::BandMatrix<T,_>::factor$'
+ops=(' absorber_core::step::system::System<T,S,_,_>::residual_and_jacobian$'
+    ' absorber_core::step::linalg::BandMatrix<T,_>::factor$'
     '::pivot_fallback$'
-    ' absorber_core::system::System<T,S,_,_>::residual$'
-    ' absorber_core::newton::Workspace<T,_>::solve$')
+    ' absorber_core::step::system::System<T,S,_,_>::residual$'
+    ' absorber_core::step::newton::Workspace<T,_>::solve$')
 step=' as absorber_firmware::sim::Sim>::step$'
 scenes=(free free-rolling free-flight free-modified free-monitor free-n6 beam locked estimator monitor-loop)
 for profile in fw fw-size; do

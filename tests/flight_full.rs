@@ -1,5 +1,5 @@
 //! Ball flight in the full solver (`absorber_full`, the law of
-//! `absorber_core::flight`) over long runs of the paper scene. The closed-form and
+//! `absorber-core/src/step/flight`) over long runs of the paper scene. The closed-form and
 //! conservation tests are the unit tests of `absorber-full/src/flight.rs`; the agreement with
 //! the core is in `full_vs_core.rs`.
 

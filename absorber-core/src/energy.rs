@@ -10,13 +10,14 @@
 //! matrix and weight), the data the step assembles: `½ u̇ᵀ M_k u̇`, the strain energy with the
 //! element's rigidities, and the heights `−Q_k(g = 1) · u` with the heads' weight included.
 
-use crate::ancf::{Element, ElementVector};
-use crate::beam::{gather, Beam};
 use crate::loads::SceneData as _;
-use crate::model::{Model, State};
+use crate::model::Model;
 use crate::outputs::Angles;
 use crate::scalar::{lit, Real};
 use crate::scene::Scene;
+use crate::state::State;
+use crate::step::ancf::{Element, ElementVector};
+use crate::step::beam::{gather, Beam};
 
 /// Energies of the bodies \[J\].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,7 +112,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     pub(crate) fn equilibrium_heights(&self) -> Heights<T> {
         let s = State {
             q: self.sys.equilibrium,
-            contact: crate::model::Contact::Off,
+            contact: crate::state::Contact::Off,
             ..self.state
         };
         let ang = self.angles_of(&s);
@@ -167,7 +168,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         let ang = self.angles_of(s);
         let (sin_theta, cos_theta) = ang.theta_sin_cos().unwrap_or((z, T::one()));
         let mut now = self.heights(&s.q, &ang, cos_theta);
-        let flying = s.contact == crate::model::Contact::InFlight;
+        let flying = s.contact == crate::state::Contact::InFlight;
         if flying {
             now.ball = s.flight.centre[1];
         }
@@ -217,11 +218,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
 
 #[cfg(test)]
 mod tests {
-    use crate::ancf::Element;
-    use crate::beam::gather;
     use crate::loads::{ArmParams, PointMass, MAX_POINT_MASSES};
     use crate::scene::{Arm, BeamOnly, FreeBall};
-    use crate::tip::Chain;
+    use crate::step::ancf::Element;
+    use crate::step::beam::gather;
+    use crate::step::scheme::Chain;
     use crate::{Contact, Model, Params};
     use nalgebra::SVector;
 
@@ -373,7 +374,7 @@ mod tests {
         let y_at = |x: f64| {
             let k = ((x / l) as usize).min(n - 1);
             let xi = (x - k as f64 * l) / l;
-            let s = crate::ancf::shape(l, xi);
+            let s = crate::step::ancf::shape(l, xi);
             let u = gather(&q, k);
             s[0] * u[1] + s[1] * u[3] + s[2] * u[5] + s[3] * u[7]
         };
@@ -385,7 +386,7 @@ mod tests {
                 .beam
                 .element
                 .mass_per_length;
-            for (xi, w) in crate::ancf::GAUSS5 {
+            for (xi, w) in crate::step::ancf::GAUSS5 {
                 height += w * l * mu * y_at((k as f64 + xi) * l);
             }
         }

@@ -17,7 +17,7 @@ pub enum Error {
     },
     /// The step input (base acceleration) is NaN or infinite. The state is unchanged.
     NonFiniteInput,
-    /// The step input is finite but beyond [`crate::model::MAX_BASE_ACCEL`] (a sensor or wiring
+    /// The step input is finite but beyond [`crate::MAX_BASE_ACCEL`] (a sensor or wiring
     /// fault, not a motion the model can represent). The state is unchanged.
     InputOutOfRange,
     /// Newton did not reach the tolerance within the iteration budget. The state is unchanged.
@@ -45,7 +45,7 @@ impl fmt::Display for Error {
             Error::InputOutOfRange => write!(
                 f,
                 "base acceleration beyond ±{:.0} m/s² (a sensor fault, not a motion); state kept",
-                crate::model::MAX_BASE_ACCEL
+                crate::state::MAX_BASE_ACCEL
             ),
             Error::NoConvergence { iterations, increment } => write!(
                 f,
@@ -59,3 +59,15 @@ impl fmt::Display for Error {
 }
 
 impl core::error::Error for Error {}
+
+/// The start error when the beam end tilts beyond a stop at static equilibrium (both solvers).
+pub const END_BEYOND_STOP: Error = Error::InvalidParameter {
+    field: "ball.stop_angle",
+    reason: "the beam end tilts beyond the stop at static equilibrium (a start with the ball resting on a stop is not supported)",
+};
+
+/// The start error when the initial ball angle lies beyond a stop (both solvers).
+pub const START_BEYOND_STOP: Error = Error::InvalidParameter {
+    field: "ball.initial_angle",
+    reason: "puts the ball beyond a stop relative to the tilted housing",
+};

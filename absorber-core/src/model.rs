@@ -1,230 +1,18 @@
-//! The model: its state, and one step read top to bottom ([`Model::step`]).
-//!
-//! A step is: the Newmark predictor and Newton corrector over the whole step
-//! ([`crate::newmark`], [`crate::newton`]), then the stop events — an impact splits the step at
-//! the crossing, a held ball is released when the stop would pull it ([`crate::stops`]) —, then
-//! the clock. Every expensive operation of the step is charged to its work cap
-//! ([`crate::newton::work`]), and a step that could not finish within it is flagged or fails;
-//! a run of such steps makes the model restart itself ([`Model::step`], "Recovery"). The
-//! equations themselves are in [`crate::system`] (beam, tip body, ball), the
-//! static solve and the start of a run in [`crate::statics`], the linear algebra in
-//! [`crate::linalg`]. The Newton matrices live in the model ([`crate::newton::Workspace`]),
-//! not on the stack.
+//! The model: its state and parameters, its start, and one step ([`Model::step`]): the input
+//! checked, the step run by the machinery of `step/` (its `mod.rs` lays the step out top to
+//! bottom), and the restart rule ("Recovery") applied to a run of failed or capped steps. Every
+//! expensive operation of the step is charged to its work cap ([`crate::work`]). The Newton
+//! matrices live in the model ([`crate::Workspace`]), not on the stack.
 
 use crate::error::Error;
-use crate::newton::Workspace;
 use crate::params::Params;
 use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
-use crate::system::System;
-use crate::tip::LocalState;
+use crate::state::{units, Contact, EventCounts, Outcome, State, StepReport, RESTART_AFTER};
+use crate::step::newton::Workspace;
+use crate::step::system::System;
+use crate::step::tip::LocalState;
 use nalgebra::SVector;
-
-pub use crate::newton::{DAMPING_TRIALS, MAX_STEP};
-
-/// Largest base acceleration a step accepts, |ÿ_b| \[m/s²\] (≈ 1000 g): a finite sample beyond
-/// it is a sensor or wiring fault, not a motion the model can represent (a single 1e6 m/s²
-/// sample used to be accepted and leave a state from which no later step converged).
-pub const MAX_BASE_ACCEL: f64 = 1.0e4;
-
-/// Where the free ball is: rolling on the track (off the stops or resting on one), or flying.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Contact {
-    /// Ball on the track, off the stops (or no stops / no free ball).
-    Off,
-    /// Ball resting on the stop at `+φ_max` (`Positive`) or `−φ_max` (`Negative`).
-    OnStop(Side),
-    /// Ball in flight inside the housing ([`crate::flight`]; its centre is the state's
-    /// [`State::flight`]).
-    InFlight,
-    /// Ball rolling on the arc beyond the stops: it flew over one and landed there
-    /// ([`crate::flight`]); the stops act on it from their other face.
-    Beyond,
-}
-
-/// Which stop.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Side {
-    /// Relative angle θ − ψ = +φ_max.
-    Positive,
-    /// Relative angle θ − ψ = −φ_max.
-    Negative,
-}
-
-impl Side {
-    /// The side of a relative angle: positive for `α > 0`, else negative.
-    pub(crate) fn of<T: Real>(alpha: T) -> Self {
-        if alpha > T::zero() {
-            Side::Positive
-        } else {
-            Side::Negative
-        }
-    }
-
-    /// +1 or −1.
-    pub fn sign<T: Real>(self) -> T {
-        match self {
-            Side::Positive => T::one(),
-            Side::Negative => -T::one(),
-        }
-    }
-}
-
-/// The full dynamic state: everything needed to continue a run. `D` = number of unknowns.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct State<T, const D: usize> {
-    /// Displacements of the free nodal coordinates from the straight reference \[m, -\], then
-    /// the ball's spin angle φ \[rad\] (free-ball scenes; paper eq. 28).
-    pub q: SVector<T, D>,
-    /// Velocities relative to the base.
-    pub v: SVector<T, D>,
-    /// Accelerations relative to the base.
-    pub a: SVector<T, D>,
-    /// The generalized-α scheme's acceleration-like variable `a_n` (Arnold & Brüls 2007;
-    /// [`crate::Integrator`]). Newmark's method never reads it (it equals `a` there); after an
-    /// impact or a start it restarts at `a` (a state given to `set_state` keeps its own).
-    pub pseudo_accel: SVector<T, D>,
-    /// Time since the start \[s\], `steps · h` (not a running sum: in `f32` adding 3 ms to an
-    /// hour drifts by tens of seconds).
-    pub time: T,
-    /// Whole steps taken since the start.
-    pub steps: u64,
-    /// Base acceleration ÿ_b of the last step (the input at `time`) \[m/s²\].
-    pub base_accel: T,
-    /// Track and stop contact.
-    pub contact: Contact,
-    /// The flying ball's centre (read only while `contact` is [`Contact::InFlight`]).
-    pub flight: crate::flight::Flight<T>,
-}
-
-/// A stop impact that happened during a step.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Impact<T> {
-    /// Time of the impact \[s\].
-    pub time: T,
-    /// Which stop.
-    pub side: Side,
-    /// Relative angular speed θ̇ − ψ̇ before the impact \[rad/s\].
-    pub relative_speed: T,
-    /// Contact impulse on the ball along the track, Λ/ρ \[N·s\].
-    pub impulse: T,
-    /// Kinetic energy dissipated, ½(1−e²)Ġ²/(∇G M⁻¹ ∇Gᵀ) \[J\].
-    pub energy_loss: T,
-    /// The ball stayed on the stop (plastic, compressive contact).
-    pub stuck: bool,
-}
-
-/// How a step ended ([`StepReport::outcome`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Outcome {
-    /// Every Newton solve of the step reached the tolerance.
-    #[default]
-    Converged,
-    /// A Newton solve stopped at the work cap ([`crate::Integrator::max_work`]) and its
-    /// iterate was taken: the step is inexact (its `increment` says by how much, in the
-    /// tolerance's units).
-    Capped,
-    /// The model restarted itself after [`RESTART_AFTER`] failed or capped steps in a row
-    /// (this one included): at rest at the static equilibrium, the ball at its initial angle,
-    /// with the consistent acceleration of this step's input; the clock counts every sample.
-    Restarted,
-}
-
-/// Failed steps, or steps capped far from convergence, in a row after which a step restarts the
-/// model ([`Model::step`]).
-pub const RESTART_AFTER: u32 = 3;
-/// A capped step whose last Newton correction is at most this many tolerances is near
-/// convergence: it ends a run of failed steps instead of extending it ([`Model::step`]).
-pub const RESTART_INCREMENT: f64 = 100.0;
-
-/// Work units as reported ([`StepReport::work`]): saturated at `u16::MAX`.
-fn units(used: u32) -> u16 {
-    u16::try_from(used).unwrap_or(u16::MAX)
-}
-
-/// How many events of each kind a step had. A step can hold more than one (a bounce and a
-/// stop hit in the rest of the step, a landing and a take-off at the step's end); the report's
-/// `impact` and `landing` describe one of them, these count all. Bytes: a step holds a few
-/// events at most (each sub-step of the step ends at one), and the report stays small enough
-/// to be moved inline (at most 64 B on a Cortex-M4F; larger, every copy is a `memcpy` call).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct EventCounts {
-    /// Take-offs from the track (with `ball.lift_height` > 0: flights, once they rise above
-    /// it; [`crate::flight`], "Counted").
-    pub separations: u8,
-    /// Landings on the track (bounces and rolling landings; with `ball.lift_height` > 0, of
-    /// the counted flights).
-    pub landings: u8,
-    /// The landings that bounced (the ball flew on).
-    pub bounces: u8,
-    /// Stop impacts (on the track and in flight, a plastic return onto the stop included).
-    pub impacts: u8,
-}
-
-/// What one step did.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StepReport<T> {
-    /// Newton iterations used, summed over the sub-solves of the step.
-    pub iterations: u32,
-    /// Largest final scaled position increment of the Newton solves \[-\].
-    pub increment: T,
-    /// Stop impact within the step, if any (on the track or in flight).
-    pub impact: Option<Impact<T>>,
-    /// Time at which the ball left the track within the step, if it did \[s\].
-    pub separation: Option<T>,
-    /// Landing on the track within the step, if any (the last one).
-    pub landing: Option<crate::flight::Landing<T>>,
-    /// Work units the step used ([`crate::newton::work`]; at most
-    /// [`crate::Integrator::max_work`], and shown saturated at 65,535: the unlimited cap of
-    /// the host's default is [`crate::newton::work::UNLIMITED`], 50,000).
-    pub work: u16,
-    /// Whether the step converged, was capped or restarted the model.
-    pub outcome: Outcome,
-    /// How many separations, landings and stop impacts the step had.
-    pub events: EventCounts,
-}
-
-impl<T: Real> StepReport<T> {
-    /// The report in `f64` (exact from `f32`), for host tools comparing precisions.
-    pub fn to_f64(&self) -> StepReport<f64> {
-        let f = crate::scalar::to_f64::<T>;
-        StepReport {
-            iterations: self.iterations,
-            increment: f(self.increment),
-            impact: self.impact.map(|i| Impact {
-                time: f(i.time),
-                side: i.side,
-                relative_speed: f(i.relative_speed),
-                impulse: f(i.impulse),
-                energy_loss: f(i.energy_loss),
-                stuck: i.stuck,
-            }),
-            separation: self.separation.map(f),
-            landing: self.landing.map(|l| crate::flight::Landing {
-                time: f(l.time),
-                normal_speed: f(l.normal_speed),
-                normal_impulse: f(l.normal_impulse),
-                tangential_impulse: f(l.tangential_impulse),
-                bounced: l.bounced,
-            }),
-            work: self.work,
-            outcome: self.outcome,
-            events: self.events,
-        }
-    }
-}
-
-/// The start error when the beam end tilts beyond a stop at static equilibrium (both solvers).
-pub const END_BEYOND_STOP: Error = Error::InvalidParameter {
-    field: "ball.stop_angle",
-    reason: "the beam end tilts beyond the stop at static equilibrium (a start with the ball resting on a stop is not supported)",
-};
-
-/// The start error when the initial ball angle lies beyond a stop (both solvers).
-pub const START_BEYOND_STOP: Error = Error::InvalidParameter {
-    field: "ball.initial_angle",
-    reason: "puts the ball beyond a stop relative to the tilted housing",
-};
 
 /// The reduced model of scene `S` with `N` elements and `D = 4N + S::EXTRA_DOFS` unknowns.
 #[derive(Clone, Debug)]
@@ -366,10 +154,10 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
                 steps: 0,
                 base_accel: T::zero(),
                 contact: Contact::Off,
-                flight: crate::flight::Flight::zero(),
+                flight: crate::state::Flight::zero(),
             },
             work: Workspace::default(),
-            max_input: crate::scalar::lit(MAX_BASE_ACCEL),
+            max_input: crate::scalar::lit(crate::state::MAX_BASE_ACCEL),
             recovery: Recovery::default(),
         }
     }
@@ -440,13 +228,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             steps: 0,
             base_accel: T::zero(),
             contact: Contact::Off,
-            flight: crate::flight::Flight::zero(),
+            flight: crate::state::Flight::zero(),
         };
         self.prepare_rest();
         Ok(iterations)
     }
 
-    /// Computes where a restart puts the model ([`crate::system::Rest`]): the start of [`Model::restart`] at
+    /// Computes where a restart puts the model (`system::Rest`): the start of [`Model::restart`] at
     /// two inputs, 0 and 100 m/s², whose accelerations give `a₀` and `a₁`. Without a possible
     /// start (the ball beyond a stop) the model has no restart state.
     fn prepare_rest(&mut self) {
@@ -533,9 +321,9 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     /// (the acceleration of the base, measured, positive up).
     ///
     /// **Work.** The step does at most [`crate::Integrator::max_work`] units of work
-    /// ([`crate::newton::work`]). A Newton solve that reaches the cap stops with its iterate:
+    /// ([`crate::work`]). A Newton solve that reaches the cap stops with its iterate:
     /// the step is taken and flagged [`Outcome::Capped`]. A step that would restart the model
-    /// (below) runs with [`crate::newton::work::RESTART`] units less, the restart's own.
+    /// (below) runs with [`crate::work::RESTART`] units less, the restart's own.
     ///
     /// **Errors.** On error the state is left exactly as it was, and so is everything that
     /// influences later steps (modified Newton's kept matrix included). An input that is not
@@ -559,8 +347,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             // This step restarts the model if it fails or is capped far: the restart's work is
             // reserved (the cap is then met by the restart step too).
             cap = cap
-                .saturating_sub(crate::newton::work::RESTART)
-                .max(crate::newton::work::MIN_CAP);
+                .saturating_sub(crate::work::RESTART)
+                .max(crate::work::MIN_CAP);
         }
         let in_flight = self.state.contact == Contact::InFlight;
         self.work
@@ -646,7 +434,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
             steps,
             base_accel,
             contact: Contact::Off,
-            flight: crate::flight::Flight::zero(),
+            flight: crate::state::Flight::zero(),
         };
         self.work.clear();
         self.recovery.run = 0;
@@ -702,101 +490,14 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
     }
 }
 
-impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
-    /// One step from `state` to the input `base_accel` at its end: `state` becomes the next
-    /// state and the report is returned, or an error (then `state` is unchanged, and nothing
-    /// else is but the workspace's scratch).
-    fn advance(
-        &self,
-        state: &mut State<T, D>,
-        base_accel: T,
-        ws: &mut Workspace<T, D>,
-    ) -> Result<StepReport<T>, Error> {
-        let h = self.params.integrator.step;
-        let start = &*state;
-        // 0. The work the step's event tests take whatever happens (no loop in them): the
-        //    flying ball's tests against the circle and the stops, the release test of a ball
-        //    on a stop (a residual); charged first, so that the solves have that much less.
-        ws.charge_fixed(match start.contact {
-            Contact::InFlight if S::FLIGHT => crate::newton::work::FLIGHT_TESTS,
-            Contact::OnStop(_) => crate::newton::work::RESIDUAL,
-            _ => 0,
-        });
-        // 1. Newmark over the whole step (the ball keeps its contact, on the track or flying).
-        let mut next = *start;
-        let solved = self.newmark(
-            start,
-            h,
-            base_accel,
-            ws,
-            self.params.integrator.newton,
-            &mut next,
-        )?;
-        let mut report = StepReport {
-            iterations: solved.iterations,
-            increment: solved.increment,
-            impact: None,
-            separation: None,
-            landing: None,
-            work: 0,
-            outcome: Outcome::Converged,
-            events: EventCounts::default(),
-        };
-        // An event the work cap cannot afford (a plastic landing's own matrix) leaves the state
-        // as the event code found it, consistent, and waits for the next step (`waits`).
-        if S::FLIGHT && start.contact == Contact::InFlight {
-            // 2'. In flight: a landing or a stop splits the step at the crossing.
-            let r = self.flight_events(start, &mut next, base_accel, ws, &mut report);
-            waits(ws, r)?;
-        } else {
-            // 2. Stops: an impact splits the step at the crossing; a held ball may be released.
-            let r = self.stop_events(start, &mut next, base_accel, ws, &mut report);
-            waits(ws, r)?;
-            // 3. Separation: a track that would pull the ball lets it fly (after a stop impact,
-            // at the step's end: `separation` says how).
-            if self.flies() {
-                let r = self.separation(start, &mut next, base_accel, ws, &mut report);
-                waits(ws, r)?;
-            }
-        }
-        // A flight counts as a separation once it is higher than `ball.lift_height`.
-        if S::FLIGHT {
-            self.note_gap(&mut next, &mut report);
-        }
-        // 4. The clock: whole steps times h (a running sum of h drifts in f32).
-        next.steps = start.steps.saturating_add(1);
-        next.time = T::from_count(next.steps) * h;
-        Self::is_finite(&next)?;
-        if ws.capped() && self.params.integrator.at_cap == crate::params::AtCap::Keep {
-            // A capped step whose iterate is not to be taken: the state as before, an error.
-            return Err(Error::WorkCap);
-        }
-        *state = next;
-        Ok(report)
-    }
-}
-
-/// An event's result: one the work cap could not afford flags the step and waits for the next.
-#[inline(always)]
-fn waits<T: Real, const D: usize>(
-    ws: &mut Workspace<T, D>,
-    r: Result<(), Error>,
-) -> Result<(), Error> {
-    match r {
-        Err(Error::WorkCap) => {
-            ws.flag_capped();
-            Ok(())
-        }
-        r => r,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::params::ImpactModel;
     use crate::scene::{FreeBall, LockedBall};
-    use crate::tip::{self, Chain};
+    use crate::state::Side;
+    use crate::step::scheme::Chain;
+    use crate::step::tip;
 
     /// The assembled Newton matrix is the exact derivative of the residual along the Newmark
     /// chain (central differences, relative 1e-6), at a deformed, fast-moving state, for every
@@ -826,7 +527,7 @@ mod tests {
         for i in 0..D {
             for j in 0..D {
                 assert!(
-                    crate::linalg::in_envelope(i, j) || jac[(i, j)] == 0.0,
+                    crate::step::linalg::in_envelope(i, j) || jac[(i, j)] == 0.0,
                     "J[{i},{j}] = {} outside the node envelope",
                     jac[(i, j)]
                 );

@@ -7,10 +7,11 @@
 //! any size).
 
 use crate::error::Error;
-use crate::model::{Contact, Model};
+use crate::model::Model;
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
-use crate::tip::Chain;
+use crate::state::Contact;
+use crate::step::scheme::Chain;
 use nalgebra::{SMatrix, SVector};
 
 /// Eigenvalues of a symmetric matrix by cyclic Jacobi, ascending.

@@ -1,9 +1,11 @@
 //! What firmware reads back after a step.
 
-use crate::model::{Contact, Model, State};
+use crate::model::Model;
+
 use crate::scalar::Real;
 use crate::scene::{BallKind, Scene};
-use crate::tip;
+use crate::state::{Contact, State};
+use crate::step::tip;
 
 /// The force the track puts on the ball centre, in the track's frame (free-ball scenes).
 ///
@@ -143,7 +145,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         Some(ContactForces { normal, tangential })
     }
 
-    /// The ball flies inside the housing ([`crate::flight`]).
+    /// The ball flies inside the housing (`flight`).
     pub fn in_flight(&self) -> bool {
         self.state.contact == Contact::InFlight
     }
@@ -172,7 +174,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Model<T, S, N, D> {
         for k in 0..N {
             // On an arm, the element's own section and heads (as the energies).
             let (_, unit) = self.element_and_unit_weight(k);
-            p -= unit.dot(&crate::beam::gather(&self.state.v, k));
+            p -= unit.dot(&crate::step::beam::gather(&self.state.v, k));
         }
         if S::HAS_TIP {
             let y_rate = self.tip_velocity();

@@ -8,7 +8,7 @@ use nalgebra::RealField;
 /// Implemented for `f32` and `f64` only, so that each precision can pick its own kernels for
 /// the few transcendental calls of the step ([`Real::fast_sin_cos`]).
 pub trait Real: RealField + Copy {
-    /// `(sin x, cos x)` for the step path: [`crate::trig::sincosf`] in `f32` (single-precision
+    /// `(sin x, cos x)` for the step path: `trig::sincosf` in `f32` (single-precision
     /// kernels, about 50× cheaper than `libm::sincosf` on a Cortex-M4F, ≤ 2 ULP), `libm`'s in
     /// `f64`.
     fn fast_sin_cos(self) -> (Self, Self);
@@ -20,7 +20,7 @@ pub trait Real: RealField + Copy {
 impl Real for f32 {
     #[inline]
     fn fast_sin_cos(self) -> (f32, f32) {
-        crate::trig::sincosf(self)
+        crate::step::trig::sincosf(self)
     }
     #[inline]
     fn from_count(n: u64) -> f32 {

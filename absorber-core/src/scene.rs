@@ -47,7 +47,7 @@ pub trait Scene: Copy + Default + 'static {
     const BALL: BallKind;
     /// The ±stop angle is enforced (free ball only).
     const STOPS: bool;
-    /// The free ball may leave the track ([`crate::flight`]; at run time also
+    /// The free ball may leave the track (`flight`; at run time also
     /// `ball.flight`). A scene without it compiles the flight code out.
     const FLIGHT: bool = false;
     /// The perfectly elastic ball's rules are compiled in (`ball.restitution` 1 with events at

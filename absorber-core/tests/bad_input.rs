@@ -159,7 +159,7 @@ fn failed_step_returns_an_error_and_keeps_the_state() {
 #[test]
 fn work_cap_above_unlimited_is_refused_by_name() {
     let mut p = Params::<f64>::default();
-    p.integrator.max_work = absorber_core::newton::work::UNLIMITED;
+    p.integrator.max_work = absorber_core::work::UNLIMITED;
     assert!(FreeBallModel::<f64, 3, 13>::at_rest(p, 0.0).is_ok());
     p.integrator.max_work = 2_041_904_906;
     p.integrator.max_iterations = 554_223_915;

@@ -1,4 +1,4 @@
-//! The ball leaves the track (`absorber_core::flight`). Each test names its
+//! The ball leaves the track (`absorber-core/src/step/flight/`). Each test names its
 //! reference:
 //! - a housing driven down at 1.5 g: the ball separates at once and follows the closed-form
 //!   ballistic path relative to the base until it lands (Newmark is exact for a constant

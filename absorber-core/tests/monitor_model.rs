@@ -1,8 +1,8 @@
 //! The monitor on the model: fixed memory, impact log, effectiveness against a locked twin.
 
-use absorber_core::model::Impact;
 use absorber_core::monitor::indicators::Block;
 use absorber_core::monitor::{Monitor, MonitorConfig, NoTwin};
+use absorber_core::Impact;
 use absorber_core::{FreeBallModel, LockedBallModel, Params};
 use std::mem::size_of;
 

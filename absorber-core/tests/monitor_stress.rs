@@ -1,7 +1,7 @@
 //! Root moment from the ANCF curvature against the exact static moment at the clamp.
 
-use absorber_core::beam::gather;
 use absorber_core::monitor::{root_curvature, root_reaction_moment, RootSection};
+use absorber_core::shared::gather;
 use absorber_core::{FreeBallModel, Model, Params, Scene};
 
 /// Exact moment of the gravity loads about the clamp in the deformed static configuration

@@ -58,7 +58,7 @@ fn f32_at_50_mm_runs_300_s_in_every_newton_mode() {
 /// the work cap and recovery the model got stuck (every sample failed after ~460); then a
 /// sample whose Newton solve cycled was refused with the state kept: f64 1 of 5,000 (step
 /// 3,526), f32 2 (steps 1,130 and 1,906), all with the ball in flight, the damped iterate
-/// cycling between two points with reused factors (`absorber_core::newton`, "Retry"). Now
+/// cycling between two points with reused factors (`absorber-core/src/step/newton.rs`, "Retry"). Now
 /// every sample is taken, converged (its last correction within the tolerance), no restart,
 /// the state finite throughout.
 #[test]

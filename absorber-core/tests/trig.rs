@@ -1,4 +1,4 @@
-//! `absorber_core::trig::sincosf` (single-precision kernels, the step path's `sin`/`cos` in
+//! `absorber_core::shared::trig::sincosf` (single-precision kernels, the step path's `sin`/`cos` in
 //! `f32`) against the `f64` functions of the standard library, the independent reference.
 //!
 //! Budget: 2 ULP of the `f32` result wherever |sin| or |cos| ≥ 2⁻⁸, and an absolute error of
@@ -8,7 +8,7 @@
 //! the reduction's half ULP. Measured: 1.55 ULP, 1.55 in the absolute form; beyond the limit
 //! (exact integer reduction, all binades to 2¹²⁸) 1.54 ULP.
 
-use absorber_core::trig::{sincosf, FAST_LIMIT};
+use absorber_core::shared::trig::{sincosf, FAST_LIMIT};
 
 fn ulp(x: f32) -> f64 {
     let b = x.abs().to_bits();
@@ -90,14 +90,17 @@ fn two_over_pi_bits_are_two_over_pi() {
     let pi = machin_pi(P);
     // 2/π · 2^P = 2^(2P+1) / (π · 2^P).
     let q = div_pow2(2 * P + 1, &pi);
-    for (j, w) in absorber_core::trig::TWO_OVER_PI_BITS.iter().enumerate() {
+    for (j, w) in absorber_core::shared::trig::TWO_OVER_PI_BITS
+        .iter()
+        .enumerate()
+    {
         let shift = P - 32 * (j + 1);
         assert_eq!(bits_at(&q, shift) as u32, *w, "word {j}");
     }
     // π/2 · 2^62 = π · 2^P / 2^(P − 61).
     assert_eq!(
         bits_at(&pi, P - 61) as i64,
-        absorber_core::trig::FRAC_PI_2_Q62,
+        absorber_core::shared::trig::FRAC_PI_2_Q62,
         "π/2 in Q62"
     );
 }

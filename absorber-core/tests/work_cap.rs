@@ -3,7 +3,7 @@
 //! untouched on error, no run of failed steps longer than `RESTART_AFTER`) and, for the restart
 //! state, the consistent acceleration that `Model::restart` computes by Newton.
 
-use absorber_core::newton::work;
+use absorber_core::work;
 use absorber_core::{AtCap, Error, EventLocation, FreeBallModel, Outcome, Params, RESTART_AFTER};
 
 /// The firmware's configuration: events at the step end, the deadline's cap.
@@ -233,7 +233,7 @@ fn the_pivoting_fallback_in_the_paper_scene() {
 /// rounding floor of `f32`, where the settled test asks for 8ε).
 #[test]
 fn modified_newton_gives_kept_factors_at_most_five_iterations() {
-    use absorber_core::newton::KEPT_ITERATIONS;
+    use absorber_core::shared::KEPT_ITERATIONS;
     use absorber_core::NewtonKind;
     let bound = KEPT_ITERATIONS * (work::RESIDUAL + work::SOLVE) + work::REFRESH + work::SOLVE;
     assert_eq!(bound, 47);

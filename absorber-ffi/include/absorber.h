@@ -132,7 +132,7 @@
 #define ABSORBER_WORK_UNLIMITED 50000
 
 /**
- * `integrator.max_work`: the firmware's cap (`absorber_core::newton::work::DEADLINE`): with
+ * `integrator.max_work`: the firmware's cap (`absorber_core::work::DEADLINE`): with
  * `ABSORBER_EVENTS_STEP_END`, no step of the free ball costs more than twice the mean
  * (`docs/embedded.md`).
  */
@@ -476,7 +476,7 @@ typedef struct AbsorberParams {
      */
     double landing_restitution;
     /**
-     * Hard cap on the work of one step in work units (`absorber_core::newton::work`: an
+     * Hard cap on the work of one step in work units (`absorber_core::work`: an
      * assembly with its factorization 16, a residual 5, a back-substitution 1; at least 24, at most
      * `ABSORBER_WORK_UNLIMITED`).
      * A step that reaches it is taken with its iterate and flagged (`ABSORBER_OUTCOME_CAPPED`);

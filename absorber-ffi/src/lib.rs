@@ -173,7 +173,7 @@ pub const ABSORBER_EVENTS_CROSSING: u32 = 0;
 pub const ABSORBER_EVENTS_STEP_END: u32 = 1;
 /// `integrator.max_work`: no cap beyond the iteration limits (default).
 pub const ABSORBER_WORK_UNLIMITED: u32 = 50_000;
-/// `integrator.max_work`: the firmware's cap (`absorber_core::newton::work::DEADLINE`): with
+/// `integrator.max_work`: the firmware's cap (`absorber_core::work::DEADLINE`): with
 /// `ABSORBER_EVENTS_STEP_END`, no step of the free ball costs more than twice the mean
 /// (`docs/embedded.md`).
 pub const ABSORBER_WORK_DEADLINE: u32 = 48;
@@ -217,8 +217,8 @@ const _: () = {
     assert!(align_of::<Slot<Monitor<f64>>>() <= ABSORBER_MODEL_ALIGN);
     assert!(FreeN6F32::DOFS <= ABSORBER_MAX_DOFS);
     // The header's literals are the core's constants.
-    assert!(ABSORBER_WORK_UNLIMITED == absorber_core::newton::work::UNLIMITED);
-    assert!(ABSORBER_WORK_DEADLINE == absorber_core::newton::work::DEADLINE);
+    assert!(ABSORBER_WORK_UNLIMITED == absorber_core::work::UNLIMITED);
+    assert!(ABSORBER_WORK_DEADLINE == absorber_core::work::DEADLINE);
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -188,7 +188,7 @@ pub struct AbsorberParams {
     pub flight: u32,
     /// Coefficient of normal restitution of a landing on the track \[-\] (default 0.5).
     pub landing_restitution: f64,
-    /// Hard cap on the work of one step in work units (`absorber_core::newton::work`: an
+    /// Hard cap on the work of one step in work units (`absorber_core::work`: an
     /// assembly with its factorization 16, a residual 5, a back-substitution 1; at least 24, at most
     /// `ABSORBER_WORK_UNLIMITED`).
     /// A step that reaches it is taken with its iterate and flagged (`ABSORBER_OUTCOME_CAPPED`);

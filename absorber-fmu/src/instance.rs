@@ -21,7 +21,7 @@ use crate::vars::{self, Causality, Output, Slot, Type, Var};
 use absorber_core::{Error, Params};
 
 /// Largest |base acceleration| a step accepts \[m/s²\] (the core's limit).
-pub const MAX_BASE_ACCEL: f64 = absorber_core::model::MAX_BASE_ACCEL;
+pub const MAX_BASE_ACCEL: f64 = absorber_core::MAX_BASE_ACCEL;
 /// Largest |tip load| \[N\] (the core's limit).
 pub const MAX_TIP_LOAD: f64 = absorber_core::loads::MAX_LOAD;
 

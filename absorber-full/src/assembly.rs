@@ -7,8 +7,8 @@ use super::kin::{Bodies, Mode, MC, NW, RB2, RT2};
 use super::matrix::{Linear, Matrix};
 use super::partition::Kin;
 use super::FullSolver;
-use absorber_core::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector};
-use absorber_core::tip::Chain;
+use absorber_core::shared::Chain;
+use absorber_core::shared::{AxialQuadrature, Element, ElementMatrix, ElementVector};
 use absorber_core::Error;
 
 pub(super) struct Evaluated {
@@ -70,7 +70,7 @@ pub(super) fn kron_i2(b: &Block4, x: &[f64]) -> [f64; 8] {
 
 /// Constants of one element's assembly: the axial quadrature, and `(M₄, K₄)` when the mass
 /// and bending matrices are `M₄ ⊗ I₂`, `K₄ ⊗ I₂` exactly (then the Newton block is built in
-/// that form, the same sums: [`absorber_core::ancf::AxialQuadrature::tangent_block`]).
+/// that form, the same sums: [`absorber_core::shared::AxialQuadrature::tangent_block`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct ElementConst {
     pub(super) quad: AxialQuadrature<f64>,

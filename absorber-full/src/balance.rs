@@ -11,12 +11,12 @@
 //! constraints' curvature over a step.
 
 use super::FullSolver;
-use absorber_core::ancf::ElementVector;
+use absorber_core::shared::ElementVector;
 
 impl FullSolver {
     /// Generalized force `F` (length `4(N + 1) + bodies`, the layout of `z`) of a vertical tip
     /// force `tip` \[N\] at the beam end and the line loads `line` \[N/m\] per element, positive
-    /// up: each element's [`absorber_core::ancf::Element::line_load_force`] on its nodes and the
+    /// up: each element's [`absorber_core::shared::Element::line_load_force`] on its nodes and the
     /// tip force on the end node's vertical displacement (the vectors the step adds to its
     /// right-hand side, `set_loads`). Missing line loads count as zero.
     pub fn load_vector(&self, tip: f64, line: &[f64]) -> Vec<f64> {

@@ -22,7 +22,7 @@
 //! configuration) plus small unsymmetric velocity and constraint terms; the static matrix is the
 //! stiffness of a stable equilibrium. Gaussian elimination without row exchanges is stable for SPD
 //! matrices and for matrices close to them (the embedded core's band LU relies on the same,
-//! `absorber_core::linalg`): the Schur complements do not grow (for an SPD matrix each entry of
+//! `absorber-core/src/step/linalg`): the Schur complements do not grow (for an SPD matrix each entry of
 //! `S_{k+1}` is at most the largest diagonal entry of `D_{k+1}`). The multipliers themselves may be
 //! large (positions and slopes have different units: at N = 512 a position row's multiplier on a
 //! slope pivot is ~`1/l` ≈ 1400), which is harmless. It is checked, not assumed: the largest entry
@@ -33,7 +33,7 @@
 //! reference (docs/full-solver.md).
 
 use super::dense::DenseLu;
-use absorber_core::linalg::PIVOT_RATIO;
+use absorber_core::shared::PIVOT_RATIO;
 
 /// Largest tail block: the end node and the six body coordinates of the mass matrix.
 pub const TAIL: usize = 10;

@@ -5,8 +5,9 @@
 use super::kin::{Mode, MC, NI, NW, RB2, RT2};
 use super::partition::Kin;
 use super::FullSolver;
-use absorber_core::scene::BallKind;
-use absorber_core::tip::{self, BallMode, Chain, LocalState, TipInertia, D5, LOCAL};
+use absorber_core::shared::tip::{self, BallMode, LocalState, TipInertia, D5, LOCAL};
+use absorber_core::shared::Chain;
+use absorber_core::BallKind;
 use absorber_core::Error;
 
 impl FullSolver {
@@ -57,7 +58,7 @@ impl FullSolver {
 
     /// The tip/ball block of the Newton matrix, `c_m ∂r/∂ä + c_v ∂r/∂ȧ + c_q ∂r/∂q` of the
     /// reduced local residual over the local independent coordinates (end node, then φ for a
-    /// free ball), from the core's tip rows in dual numbers ([`absorber_core::tip::residual`]).
+    /// free ball), from the core's tip rows in dual numbers ([`absorber_core::shared::tip::residual`]).
     ///
     /// The reduced residual here, `Bᵀ M B δ`, equals `Bᵀ (M ẅ − Q)` with `ẅ = B x + γ` (the
     /// augmented system's solution satisfies `Bᵀ (M ẅ_aug − Q) = 0`), which are Lagrange's

@@ -1,5 +1,5 @@
 //! Ball flight in the full solver (docs/model.md, "Contact and flight"; the embedded
-//! core's `absorber_core::flight` implements the same physics in minimal coordinates).
+//! core's `absorber-core/src/step/flight` implements the same physics in minimal coordinates).
 //!
 //! **Flight mode** ([`Mode::Flying`]): the rolling contact constraints `c₄` (circle) and `c₅`
 //! (no slip) are released; only the fixed joint `c₁…c₃` welds the tip body to the beam end. The
@@ -12,11 +12,11 @@
 //! - *separation* (ball on the track): the track's normal force `N = λ₄` (the multiplier of
 //!   the circle constraint, [`FullSolver::contact_forces`]) is negative at the step's end and
 //!   the step had no stop impact: `τ = N₀ / (N₀ − N₁)` (0 if `N₀ ≤ 0`,
-//!   [`absorber_core::flight::separation_fraction`]); rolling sub-step `τh`, take-off (positions
+//!   [`absorber_core::shared::separation_fraction`]); rolling sub-step `τh`, take-off (positions
 //!   and velocities are the maximal coordinates already: continuous), consistent acceleration
 //!   of the flight mode, flight sub-step `(1 − τ)h`;
 //! - *landing* (in flight): `d = |c − A| − ρ > 0` at the end: `τ` = the cubic Hermite root of `d`
-//!   with rates `ḋ h`, `ḋ = n·(ċ − Ȧ)` ([`absorber_core::flight::hermite_root`]);
+//!   with rates `ḋ h`, `ḋ = n·(ċ − Ȧ)` ([`absorber_core::shared::hermite_root`]);
 //! - *stop in flight*: at the stops' height (`|c − A| > ρ − r_b`) at both ends, the polar angle
 //!   relative to the housing `α_f = atan2(c_x − A_x, A_y − c_y) − ψ` crosses `±α_max` from either
 //!   face: `τ` = the Hermite root of `α_f ∓ α_max`. The earlier of landing and stop wins;
@@ -46,7 +46,7 @@ mod impulse;
 
 use super::{FullSolver, FullState};
 use crate::kin::{RB1, RB2};
-use absorber_core::flight::{hermite_root, separation_fraction};
+use absorber_core::shared::{hermite_root, separation_fraction};
 use absorber_core::{Contact, Error, Landing, Side, StepReport};
 
 /// A rolling ball starting a step this far beyond a stop \[rad\] still counts as between the

@@ -5,7 +5,7 @@
 //! beam nodal coordinates from the straight reference, root node included (`4(N+1)`), then the
 //! tip mass `(R_t1, R_t2, ψ)` and the ball `(φ, R_b1, R_b2)` (scenes without them leave them
 //! out). The mass matrix is constant: the beam's consistent mass, `diag(m_t, m_t, J_t)`,
-//! `diag(J_b, m_b, m_b)`. Forces: the element forces of [`absorber_core::ancf::Element`] (the one
+//! `diag(J_b, m_b, m_b)`. Forces: the element forces of [`absorber_core::shared::Element`] (the one
 //! source of the element integrals), the weights under the effective gravity `g + ÿ_b`.
 //!
 //! **Constraints** `C(z) = 0`: the clamp of the root node (4), the fixed joint (eq. 25: 3, with
@@ -50,11 +50,11 @@
 //! is released and the ball's `(φ, R_b1, R_b2)` become independent coordinates (`4N + 3`, a third
 //! reduced Newton matrix: the beam's band plus the ball's diagonal masses). Landings (bounce or
 //! plastic rough landing by momentum projection onto the rolling partition) and stops in flight
-//! follow the same law as the core (`absorber_core::flight`).
+//! follow the same law as the core (`absorber-core/src/step/flight`).
 //!
-//! Stops, stick and release, impulses: the core's algorithm (`absorber_core::stops`), with the
+//! Stops, stick and release, impulses: the core's algorithm (`absorber-core/src/step/stops`), with the
 //! relative angle `α = θ − ψ` and its gradient computed from the maximal coordinates. Newton:
-//! the core's rule (`absorber_core::newton`) for step solves — one matrix per solve, reused while
+//! the core's rule (`absorber-core/src/step/newton`) for step solves — one matrix per solve, reused while
 //! it contracts — and a fresh matrix every iteration for static and acceleration solves.
 //!
 //! **Layout: the path of one step.** [`FullSolver::step`] (`step`: the Newmark or generalized-α
@@ -90,8 +90,8 @@ mod sparse;
 mod statics;
 mod step;
 
-use absorber_core::ancf::{Element, ElementMatrix};
 use absorber_core::loads::{arm_section, ArmParams, Section};
+use absorber_core::shared::{Element, ElementMatrix};
 use absorber_core::{Contact, Error, Landing, Params};
 use assembly::{ElementConst, MassFactor};
 use kin::Bodies;

@@ -3,9 +3,9 @@
 
 use super::kin::{Mode, NW, PHI};
 use super::{zeros, FullSolver, FullState, Work};
-use absorber_core::model::{DAMPING_TRIALS, MAX_STEP};
-use absorber_core::newton::{SETTLE, SLOW};
-use absorber_core::tip::Chain;
+use absorber_core::shared::Chain;
+use absorber_core::shared::{DAMPING_TRIALS, MAX_STEP};
+use absorber_core::shared::{SETTLE, SLOW};
 use absorber_core::{Contact, Error};
 
 pub(super) struct Solved {
@@ -161,7 +161,7 @@ impl FullSolver {
                 warm[j] += dq * ch.c_q * lambda;
             }
             // The core's settled test: a reused matrix's remaining error θ/(1−θ)‖dx‖ must be
-            // below SETTLE·tol too (absorber_core::newton).
+            // below SETTLE·tol too (absorber-core/src/step/newton.rs).
             let settled = fresh || it == 1 || {
                 let theta = increment / previous;
                 theta * increment <= (1.0 - theta) * (tol * SETTLE).max(8.0 * f64::EPSILON)

@@ -6,7 +6,7 @@ use super::assembly::{kron_i2, Block4};
 use super::kin::{Mode, MC, NW, PHI, PSI, RB1, RB2, RT1, RT2};
 use super::{FullSolver, FullState};
 use crate::sim::{Observation, Simulator};
-use absorber_core::ancf::{Element, ElementVector};
+use absorber_core::shared::{Element, ElementVector};
 use absorber_core::{Contact, Energies, Error, StepReport};
 
 impl FullSolver {

@@ -45,7 +45,7 @@ pub trait Simulator: Send {
     /// to pull) and tangential (rolling friction, plus a stop's reaction while the ball rests
     /// on it); `absorber_core::ContactForces`. `None` without a free ball.
     fn contact_forces(&self) -> Option<(f64, f64)>;
-    /// The ball flies inside the housing (`absorber_core::flight`; false without a free ball or
+    /// The ball flies inside the housing (`absorber-core/src/step/flight`; false without a free ball or
     /// for a solver that keeps it on the track).
     fn in_flight(&self) -> bool {
         false

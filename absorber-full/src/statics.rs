@@ -3,8 +3,8 @@
 
 use super::kin::{Mode, PHI};
 use super::{FullSolver, Work};
-use absorber_core::model::{END_BEYOND_STOP, START_BEYOND_STOP};
-use absorber_core::tip::Chain;
+use absorber_core::shared::Chain;
+use absorber_core::shared::{END_BEYOND_STOP, START_BEYOND_STOP};
 use absorber_core::{Contact, Error};
 use nalgebra::DMatrix;
 

@@ -1,12 +1,12 @@
 //! One step and its events: the Newmark (or generalized-α) step of the independent
 //! coordinates, the stop impacts that split it, stick and release (the core's algorithm,
-//! `absorber_core::stops`, with the relative angle from the maximal coordinates).
+//! `absorber-core/src/step/stops`, with the relative angle from the maximal coordinates).
 
 use super::kin::{Mode, NW, PHI};
 use super::newton::Solved;
 use super::{flight, zeros, FullSolver, FullState, Work};
-use absorber_core::newmark::AlphaRecursion;
-use absorber_core::tip::Chain;
+use absorber_core::shared::AlphaRecursion;
+use absorber_core::shared::Chain;
 use absorber_core::{Contact, Error, Impact, ImpactModel, NewtonKind, Side, StepReport};
 
 impl FullSolver {
@@ -22,14 +22,14 @@ impl FullSolver {
     }
 
     /// The Newton chain of a step of length `h`: `(κβh², κγh, 1)`, `κ = (1 − α_f)/(1 − α_m)`
-    /// (`κ = 1` for Newmark; `absorber_core::newmark`).
+    /// (`κ = 1` for Newmark; `absorber-core/src/step/newmark`).
     pub(super) fn step_chain(&self, h: f64) -> Chain<f64> {
         let it = &self.params.integrator;
         AlphaRecursion::chain(it, AlphaRecursion::of(it).as_ref(), h)
     }
 
     /// One Newmark (or generalized-α) step of the independent coordinates
-    /// (`absorber_core::newmark` states the scheme).
+    /// (`absorber-core/src/step/newmark` states the scheme).
     pub(super) fn newmark(
         &self,
         s: &FullState,
@@ -140,7 +140,7 @@ impl FullSolver {
 
     /// Fraction τ ∈ [0, 1] of the step at which α reaches `target`: root of the cubic Hermite
     /// interpolant of α through both step ends with their rates
-    /// ([`absorber_core::flight::hermite_root`], shared with the core).
+    /// ([`absorber_core::shared::hermite_root`], shared with the core).
     pub(super) fn crossing_fraction(
         &self,
         start: &FullState,
@@ -148,7 +148,7 @@ impl FullSolver {
         h: f64,
         target: f64,
     ) -> f64 {
-        absorber_core::flight::hermite_root(
+        absorber_core::shared::hermite_root(
             self.relative_angle(start) - target,
             self.relative_rate(start) * h,
             self.relative_angle(end) - target,
@@ -161,8 +161,8 @@ impl FullSolver {
         if !base_accel.is_finite() {
             return Err(Error::NonFiniteInput);
         }
-        // The core's input range (absorber_core::model::MAX_BASE_ACCEL): a sensor fault.
-        if base_accel.abs() > absorber_core::model::MAX_BASE_ACCEL {
+        // The core's input range (absorber_core::MAX_BASE_ACCEL): a sensor fault.
+        if base_accel.abs() > absorber_core::MAX_BASE_ACCEL {
             return Err(Error::InputOutOfRange);
         }
         let h = self.params.integrator.step;
@@ -272,7 +272,7 @@ impl FullSolver {
                 Side::Negative
             };
             let target = side.sign::<f64>() * stop;
-            let tau = absorber_core::flight::hermite_root(
+            let tau = absorber_core::shared::hermite_root(
                 a0 - target,
                 self.relative_rate(start) * h,
                 a1 - target,

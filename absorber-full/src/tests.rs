@@ -1,6 +1,6 @@
 use super::kin::Mode;
 use super::*;
-use absorber_core::tip::Chain;
+use absorber_core::shared::Chain;
 
 /// The residual from the augmented system equals the beam residual plus the reduced local
 /// residual (two routes to the same virtual work), and the Newton matrix is its derivative.

@@ -2,14 +2,14 @@
 //! radius (the integrator's own dissipation, to be set beside the structure's).
 //!
 //! For the undamped mode `q̈ + ω²q = 0`, one step of Newmark's method or of the generalized-α
-//! scheme (`absorber_core::newmark`) maps `(q, q̇, a)` linearly to the next: the amplification
+//! scheme (`absorber-core/src/step/newmark`) maps `(q, q̇, a)` linearly to the next: the amplification
 //! matrix `A(Ω)`, `Ω = ωh`. Its complex pair `λ = exp(Ω̄(−ζ̄ ± i√(1 − ζ̄²)))` gives the
 //! numerical damping ratio `ζ̄ = −Re ln λ / |ln λ|` (Hilber, Hughes & Taylor 1977; Chung &
 //! Hulbert 1993, eqs. 27–29), and its largest modulus is the spectral radius. Closed forms to
 //! check against: Newmark `ζ̄ → (γ − ½)Ω/2` for `Ω → 0`; the trapezoidal rule `ζ̄ = 0`;
 //! generalized-α spectral radius `→ ρ∞` for `Ω → ∞`.
 
-use absorber_core::newmark::AlphaRecursion;
+use absorber_core::shared::AlphaRecursion;
 use absorber_core::Integrator;
 use nalgebra::Matrix3;
 

@@ -8,7 +8,7 @@
 //! Usage: `cargo run --release -p absorber-firmware --example cap_choice -- <bin> <cap>…`
 //! with `<bin>` one of `free`, `free-rolling`, `free-modified`, `free-n6`.
 
-use absorber_core::newton::work;
+use absorber_core::work;
 use absorber_core::{Error, FreeBall, FreeBallNoFlight, Model, NewtonKind, Outcome, Scene};
 use absorber_firmware::{base_accel, firmware_params, Setup, FREQUENCY_HZ, STEPS};
 

@@ -117,7 +117,7 @@ pub fn run<M: Sim, W: Write, P: Probe>(
     }
     let _ = writeln!(out, "static tip={}", F(m.static_tip()));
     {
-        use absorber_core::newton::work as w;
+        use absorber_core::work as w;
         let _ = writeln!(
             out,
             "work cap={} refresh={} residual={} solve={} fallback={}",

@@ -51,7 +51,7 @@ fn params() -> Params<f32> {
     // The free ball's deadline, not this run's hardest step (23 units) plus the reserve: with
     // 25 units the arm, rung by one 8 g sample, needs two refreshed iterations a step for tens
     // of steps and is capped for all of them (docs/embedded.md, "Firmware defaults").
-    p.integrator.max_work = absorber_core::newton::work::DEADLINE;
+    p.integrator.max_work = absorber_core::work::DEADLINE;
     let [c, factor, gravity] = g::DAMPING_CALIBRATION_GRAVITY;
     p.damping.stiffness_proportional = c;
     p.calibration.bending_stiffness = factor;

@@ -64,7 +64,7 @@ pub fn base_accel(k: u32, h: f32, frequency: f32) -> f32 {
 pub fn firmware_params(setup: &Setup) -> Params<f32> {
     let mut p = Params::<f32>::default();
     p.integrator.events = EventLocation::StepEnd;
-    p.integrator.max_work = absorber_core::newton::work::DEADLINE;
+    p.integrator.max_work = absorber_core::work::DEADLINE;
     if let Some(e) = setup.stress.and_then(|s| s.restitution) {
         p.ball.restitution = e;
         p.ball.landing_restitution = e;

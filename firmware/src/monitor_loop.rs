@@ -27,7 +27,7 @@ use absorber_core::estimator::{
     Ekf, EkfConfig, HealthConfig, ModalBasis, Readings, Sensor, SensorKind, SensorSet, AUGMENTED,
 };
 use absorber_core::monitor::stress::RootSection;
-use absorber_core::newton::work;
+use absorber_core::work;
 use absorber_core::{Error, EventLocation, FreeBall, Lean, Loaded, Model, Params, StepReport};
 use core::fmt::Write;
 use core::mem::MaybeUninit;

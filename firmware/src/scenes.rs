@@ -70,7 +70,7 @@ pub trait Config {
     /// The scene's work cap (`Integrator::max_work`): the work of the hardest step of its
     /// paper run plus the events' reserve, so that the paper's input is never capped
     /// (`docs/embedded.md`, "Work cap").
-    const MAX_WORK: u32 = absorber_core::newton::work::DEADLINE;
+    const MAX_WORK: u32 = absorber_core::work::DEADLINE;
     /// Applies the change (the cap is set after it).
     fn apply(p: &mut Params<f32>) {
         let _ = p;
@@ -84,14 +84,14 @@ pub struct Modified;
 impl Config for Modified {
     const NAME: &'static str = "modified Newton";
     /// Its hardest paper step takes 47 units (five iterations with the kept factors and a
-    /// refresh: `absorber_core::newton::KEPT_ITERATIONS`).
+    /// refresh: `absorber_core::shared::KEPT_ITERATIONS`).
     const MAX_WORK: u32 = 49;
     fn apply(p: &mut Params<f32>) {
         p.integrator.newton = absorber_core::NewtonKind::Modified;
     }
 }
 
-/// The work cap `W` (units) instead of [`absorber_core::newton::work::DEADLINE`], for a scene
+/// The work cap `W` (units) instead of [`absorber_core::work::DEADLINE`], for a scene
 /// whose hardest paper step takes `W − 2`: the beam only and the locked ball (23 units), the
 /// free ball on 6 elements (46); and for the ball held on the track, 47 (its hardest paper step
 /// converges in 41 units instead of 46, with the factors in hand: `fw-free-rolling`).

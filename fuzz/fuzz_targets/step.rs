@@ -50,7 +50,7 @@ fuzz_target!(|bytes: &[u8]| {
     }
     // The firmware's per-step work cap: every step's work is bounded (without it one violent
     // input runs up to 50,000 units a step, ~20 ms here), so 10⁷ steps fit a campaign.
-    p.integrator.max_work = absorber_core::newton::work::DEADLINE;
+    p.integrator.max_work = absorber_core::work::DEADLINE;
     let Ok(mut m) = FreeBallModel::<f32, 3, 13>::at_rest(p, 0.0) else {
         return;
     };

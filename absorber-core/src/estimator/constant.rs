@@ -9,13 +9,13 @@
 //! host's design leaves the positions uncorrected (`Gain::q = 0`): a correction of the vertical
 //! slopes at a deflected state changes the axial strain to first order, which the gain
 //! linearized at the static state does not know, and it drove the loop unstable at large swings
-//! (`host_sim::estimate::design`); velocities and accelerations carry the correction into the
+//! (`absorber_sim::estimate::design`); velocities and accelerations carry the correction into the
 //! positions through the integrator. The gain is the steady-state Kalman gain of the model linearized about its
 //! static state — the discrete step map itself, `x_k = F x_{k−1} + G P_k` with the state
 //! `x = (q, q̇, q̈, a)` of the Newmark / generalized-α recursion — augmented with the unknown
 //! tip load P (first-order Gauss–Markov, `P_k = φ P_{k−1} + η`, increment variance `q_P` per
 //! sample: a random walk that forgets over a time constant τ) and the sensor bias (random
-//! walk, `q_b`), and computed on the host (`host_sim::estimate::design`), where the Riccati
+//! walk, `q_b`), and computed on the host (`absorber_sim::estimate::design`), where the Riccati
 //! equation is iterated to convergence in `f64`.
 //!
 //! Why this and not an extended Kalman filter: the arm's response is linear to within its
@@ -37,10 +37,11 @@
 
 use crate::error::Error;
 use crate::loads::{Loads, MAX_LOAD};
-use crate::model::{Model, State, StepReport};
+use crate::model::Model;
 use crate::monitor::stress::{root_reaction_moment, RootSection};
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
+use crate::state::{State, StepReport};
 use nalgebra::SVector;
 
 /// The constant gain of an [`Estimator`] and the steady-state uncertainty it implies.

@@ -4,8 +4,8 @@
 //! Estimation*), with the small products the filter reads the factors through. Private to the
 //! estimator.
 
-use crate::linalg::dot;
 use crate::scalar::{is_positive, Real};
+use crate::step::linalg::dot;
 use nalgebra::{SMatrix, SVector};
 
 /// `hᵀ U D Uᵀ h`.

@@ -10,8 +10,8 @@
 //! record, so [`ImpactLog::record_step`] logs that one and counts the others in
 //! [`ImpactLog::total`] and [`ImpactLog::unlogged`].
 
-use crate::model::{Impact, Side, StepReport};
 use crate::scalar::Real;
+use crate::state::{Impact, Side, StepReport};
 use heapless::Deque;
 
 /// The last `K` impacts and counters since the start.

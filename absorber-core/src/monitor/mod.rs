@@ -59,10 +59,11 @@ pub use stress::{
 
 use crate::energy::Heights;
 use crate::error::Error;
-use crate::model::{Model, StepReport};
+use crate::model::Model;
 use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::{LockedBall, Scene};
+use crate::state::StepReport;
 
 /// A model advanced beside the monitored one on the same input, for comparison.
 pub trait Twin<T: Real> {
@@ -200,7 +201,7 @@ pub struct Monitor<
     flight: FlightLog<T>,
 }
 
-/// What the ball's contact did (free-ball scenes; `crate::flight`): samples in flight,
+/// What the ball's contact did (free-ball scenes; `step::flight`): samples in flight,
 /// separations, landings and bounces, and the largest friction coefficient rolling needed, on
 /// the track (`|F_t|/N`, off the stops) and in a rolling landing (`|P_t|/P_n`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

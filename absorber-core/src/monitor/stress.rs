@@ -3,7 +3,7 @@
 //! **Curvature.** At the clamp (x = 0 of element 0) the slope is fixed, r′ = (1, 0), so the
 //! signed curvature `κ = (r′ × r″) / |r′|³` reduces exactly to the component of
 //! `r″ = S_xx(0) u` normal to the root tangent: **κ = r″_y** \[1/m\]
-//! ([`crate::ancf::Element::curvature_vector`] of element 0 at ξ = 0). Positive κ is concave
+//! (`ancf::Element::curvature_vector` of element 0 at ξ = 0). Positive κ is concave
 //! up (sagging).
 //!
 //! **Moment** \[N·m\], sagging positive: gravity makes it negative (hogging) at the clamp of the
@@ -31,13 +31,13 @@
 //!   tolerance for any N, and the consistent dynamic moment. Cost: one row of one element
 //!   residual (the axial force of element 0 without its tangent).
 
-use crate::ancf::{ElementMatrix, ElementVector};
-use crate::beam::gather;
 use crate::error::Error;
 use crate::model::Model;
 use crate::params::BeamParams;
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
+use crate::step::ancf::{ElementMatrix, ElementVector};
+use crate::step::beam::gather;
 
 /// Section data at the clamp that turns curvature into moment and stress.
 #[derive(Clone, Copy, Debug, PartialEq)]

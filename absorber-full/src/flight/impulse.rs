@@ -5,8 +5,8 @@
 use super::super::kin::{Mode, NW, PHI, PSI, RB1, RB2};
 use super::super::{FullSolver, FullState, Work};
 use super::{positive, wrap};
-use absorber_core::flight::{bounce_impulse, landing_bounces};
-use absorber_core::tip::Chain;
+use absorber_core::shared::Chain;
+use absorber_core::shared::{bounce_impulse, landing_bounces};
 use absorber_core::{Contact, Error, Impact, ImpactModel, Landing, Side, StepReport};
 
 impl FullSolver {
@@ -80,7 +80,7 @@ impl FullSolver {
             work.projection = work.projection.max((rel.r - rho).abs());
         }
         let normal_speed = n[0] * rel.rate[0] + n[1] * rel.rate[1];
-        if normal_speed.partial_cmp(&absorber_core::flight::GRAZING)
+        if normal_speed.partial_cmp(&absorber_core::shared::GRAZING)
             != Some(std::cmp::Ordering::Greater)
         {
             return Ok(()); // grazing: no impulse, the ball flies on

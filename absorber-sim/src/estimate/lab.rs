@@ -146,8 +146,8 @@ fn truth(
     p.integrator.tolerance = TRUTH_TOLERANCE;
     let h = p.integrator.step;
     let section = RootSection::rectangle(&p.beam).map_err(core)?;
-    let element = absorber_core::ancf::Element::of_beam(&p.beam, &p.calibration, TRUTH_ELEMENTS);
-    let beam = absorber_core::beam::Beam::new(element, p.damping.stiffness_proportional);
+    let element = absorber_core::shared::Element::of_beam(&p.beam, &p.calibration, TRUTH_ELEMENTS);
+    let beam = absorber_core::shared::Beam::new(element, p.damping.stiffness_proportional);
     let zero_line = vec![0.0; TRUTH_ELEMENTS];
     let tip = 4 * TRUTH_ELEMENTS + 1;
     let stress_of = |st: &absorber_full::FullState| {

@@ -321,12 +321,12 @@ pub(crate) fn stress_error_pct(truth: &Truth, estimate: &[f64], static_estimate:
 /// carries (the core's formula of [`absorber_core::monitor::stress`] on the full solver's
 /// coordinates).
 pub(crate) fn clamp_stress(
-    b: &absorber_core::beam::Beam<f64>,
-    applied: absorber_core::ancf::ElementVector<f64>,
+    b: &absorber_core::shared::Beam<f64>,
+    applied: absorber_core::shared::ElementVector<f64>,
     section: &RootSection<f64>,
     st: &absorber_full::FullState,
 ) -> f64 {
-    use absorber_core::ancf::ElementVector;
+    use absorber_core::shared::ElementVector;
     let u = ElementVector::<f64>::from_fn(|i, _| st.q[i]);
     let v = ElementVector::<f64>::from_fn(|i, _| st.v[i]);
     let a = ElementVector::<f64>::from_fn(|i, _| st.a[i]);

@@ -4,7 +4,7 @@
 //! (`AtCap::Take`, the firmware's default) and with the cap keeping the state
 //! (`AtCap::Keep`). Deterministic: the same inputs as the firmware runs under QEMU.
 
-use absorber_core::newton::work;
+use absorber_core::work;
 use absorber_core::{AtCap, FreeBallModel, Outcome};
 use absorber_firmware::stress::{Rng, Stress, SCENES};
 use absorber_firmware::{firmware_params, Setup, STEPS};

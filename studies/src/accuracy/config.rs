@@ -47,7 +47,7 @@ pub struct Config {
     /// (`EventLocation::StepEnd`) instead of their crossing.
     #[serde(default)]
     pub step_end: bool,
-    /// The firmware's work cap per step (`absorber_core::newton::work::DEADLINE`; else none).
+    /// The firmware's work cap per step (`absorber_core::work::DEADLINE`; else none).
     #[serde(default)]
     pub capped: bool,
 }
@@ -139,7 +139,7 @@ impl Config {
             p.integrator.events = absorber_core::EventLocation::StepEnd;
         }
         if self.capped {
-            p.integrator.max_work = absorber_core::newton::work::DEADLINE;
+            p.integrator.max_work = absorber_core::work::DEADLINE;
         }
         p
     }
@@ -178,7 +178,7 @@ impl Config {
             a.push_str(" events=step-end");
         }
         if self.capped {
-            a.push_str(&format!(" work={}", absorber_core::newton::work::DEADLINE));
+            a.push_str(&format!(" work={}", absorber_core::work::DEADLINE));
         }
         Some(a)
     }

@@ -446,7 +446,7 @@ pub fn matrix(length: Length) -> Vec<Case> {
     }
     // Every sample alternating ±1000 m/s², the largest input accepted, at the step's Nyquist
     // limit: every sample taken (a solve whose reused factors cycle is solved again with
-    // fresh ones, `absorber_core::newton`).
+    // fresh ones, `absorber-core/src/step/newton`).
     let v: Vec<f64> = (0..5001)
         .map(|k: usize| if k.is_multiple_of(2) { 1000.0 } else { -1000.0 })
         .collect();

@@ -134,12 +134,13 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> Balance for CoreProbe<T,
                 Some(sec) => sec.beam.element,
                 None => {
                     let p = self.0.params();
-                    absorber_core::ancf::Element::of_beam(&p.beam, &p.calibration, N)
+                    absorber_core::shared::Element::of_beam(&p.beam, &p.calibration, N)
                 }
             };
             let q = element.line_load_force(absorber_core::scalar::lit::<T>(*w));
             for (i, x) in q.iter().enumerate() {
-                if let Some(d) = absorber_core::beam::global_index(k, i).and_then(|g| f.get_mut(g))
+                if let Some(d) =
+                    absorber_core::shared::global_index(k, i).and_then(|g| f.get_mut(g))
                 {
                     *d += f64_of(*x);
                 }

@@ -1,8 +1,15 @@
 use super::*;
+use crate::estimator::health::HealthConfig;
 use crate::estimator::sensors::Sensor;
+use crate::estimator::sensors::{SensorKind, SensorSet};
+use crate::estimator::ud::quadratic;
 use crate::estimator::ud::{bierman, thornton};
+use crate::loads::Loads;
+use crate::model::Model;
+use crate::monitor::stress::RootSection;
 use crate::scene::{Loaded, LockedBall};
 use crate::Params;
+use nalgebra::{SMatrix, SVector};
 
 type Sc = Loaded<LockedBall>;
 

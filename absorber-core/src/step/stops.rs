@@ -14,7 +14,7 @@
 //!    and the accelerations before it ([`System::after_impulse`]).
 //!
 //! Each of these solves has its own Newton matrix (another step length, or the mass matrix
-//! alone), reused within it ([`crate::newton`]): an impact step factors about four times where
+//! alone), reused within it ([`crate::step::newton`]): an impact step factors about four times where
 //! an ordinary step factors once (docs/embedded.md measures the worst step).
 //!
 //! With events at the step end ([`crate::EventLocation::StepEnd`]) the trial stands and the
@@ -24,13 +24,14 @@
 //! to pull it.
 
 use crate::error::Error;
-use crate::model::{Contact, Impact, Side, State, StepReport};
-use crate::newton::Workspace;
 use crate::params::{EventLocation, ImpactModel};
 use crate::scalar::{is_positive, lit, Real};
 use crate::scene::Scene;
-use crate::system::{Problem, System};
-use crate::tip::{self, Chain};
+use crate::state::{Contact, Impact, Side, State, StepReport};
+use crate::step::newton::Workspace;
+use crate::step::scheme::Chain;
+use crate::step::system::{Problem, System};
+use crate::step::tip;
 use nalgebra::SVector;
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
@@ -78,7 +79,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                     next.contact = Contact::Off;
                 }
             }
-            Contact::InFlight | Contact::Beyond => {} // (flight events: crate::flight)
+            Contact::InFlight | Contact::Beyond => {} // (flight events: crate::step::flight)
         }
         Ok(())
     }
@@ -116,8 +117,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// to it (a ball beyond the stops may roll past the top, where θ − ψ leaves `(−π, π]`).
     pub(crate) fn branch_angles(&self, a: &State<T, D>, b: &State<T, D>) -> (T, T) {
         let (raw0, raw1) = (self.relative_angle(a), self.relative_angle(b));
-        let a0 = crate::flight::wrap(raw0);
-        (a0, a0 + crate::flight::wrap(raw1 - raw0))
+        let a0 = crate::step::flight::roots::wrap(raw0);
+        (a0, a0 + crate::step::flight::roots::wrap(raw1 - raw0))
     }
 
     /// Splits a step that crossed a stop (module doc), from the span between the stops
@@ -155,7 +156,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                 Side::Negative
             };
             let target = side.sign::<T>() * stop;
-            tau = crate::flight::hermite_root(
+            tau = crate::step::flight::roots::hermite_root(
                 a0 - target,
                 self.relative_rate(start) * h,
                 a1 - target,
@@ -193,7 +194,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// interpolant, error O(h²), misplaces the ball by ~α̈h²/8, which the projection onto the
     /// stop then turns into a potential-energy error).
     fn crossing_fraction(&self, start: &State<T, D>, end: &State<T, D>, h: T, target: T) -> T {
-        crate::flight::hermite_root(
+        crate::step::flight::roots::hermite_root(
             self.relative_angle(start) - target,
             self.relative_rate(start) * h,
             self.relative_angle(end) - target,
@@ -279,7 +280,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         };
         // (The stick test's residual is charged to the work cap; unaffordable, no test: the
         // ball rebounds plastically and the step is flagged.)
-        if plastic && inside && ws.afford_event(crate::newton::work::RESIDUAL) {
+        if plastic && inside && ws.afford_event(crate::work::RESIDUAL) {
             // Stay on the stop if the contact force is compressive. Tried on `s` itself (what
             // holding changes is saved and put back otherwise: no second state in the frame).
             let saved = (s.contact, s.a, s.pseudo_accel, Self::spin_of(s));
@@ -367,7 +368,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         y: &mut SVector<T, D>,
         ws: &mut Workspace<T, D>,
     ) -> Option<(T, T)> {
-        if !ws.afford_event(2 * crate::newton::work::RESIDUAL) {
+        if !ws.afford_event(2 * crate::work::RESIDUAL) {
             return None;
         }
         let g = self.effective_gravity(s.base_accel);
@@ -387,11 +388,11 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// the accelerations and the generalized-α variable go on from before it. The impulse is the
     /// nonsmooth part of the motion and leaves its smooth part (the accelerations) continuous,
     /// as in the nonsmooth generalized-α scheme (Brüls, Acary & Cardona 2014, *Comput. Methods
-    /// Appl. Mech. Eng.* 281:131). The consistent acceleration this code used to restart from
-    /// instead carries the stiff modes' instantaneous response to the jump (with
-    /// stiffness-proportional damping `c K Δq̇`: slope accelerations of 10⁶ s⁻² after a bounce of
-    /// 10⁻⁴ N·s), which the predictor of the rest of the step extrapolated over up to a whole
-    /// step: the beam end folded over and Newton failed (generalized-α, 16 elements, 3 ms;
+    /// Appl. Mech. Eng.* 281:131). A restart from the consistent acceleration would instead carry
+    /// the stiff modes' instantaneous response to the jump (with stiffness-proportional damping
+    /// `c K Δq̇`: slope accelerations of 10⁶ s⁻² after a bounce of 10⁻⁴ N·s), which the predictor
+    /// of the rest of the step extrapolates over up to a whole step: the beam end folds over and
+    /// Newton fails (generalized-α, 16 elements, 3 ms;
     /// docs/model.md, "Events and the integrator"). A flying ball's centre keeps its known
     /// acceleration `(0, −g_eff)`.
     pub(crate) fn after_impulse(&self, s: &mut State<T, D>) {
@@ -486,11 +487,7 @@ mod tests {
             let mut y = SVector::<f64, 13>::from_fn(|i, _| ((i as f64) * 2.1).sin());
             let y0 = y;
             let mut ws = Workspace::default();
-            ws.begin_step(
-                crate::NewtonKind::Full,
-                crate::newton::work::UNLIMITED,
-                false,
-            );
+            ws.begin_step(crate::NewtonKind::Full, crate::work::UNLIMITED, false);
             let (uy, yy) = m
                 .sys
                 .mass_products(&s, contact, &mut y, &mut ws)

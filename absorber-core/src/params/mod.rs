@@ -64,7 +64,7 @@ pub struct BallParams<T> {
     /// model.
     pub stop_contact_time: T,
     /// The ball may leave the track when the track would have to pull it (normal force
-    /// `N < 0`), fly inside the housing and land again ([`crate::flight`]). `false`
+    /// `N < 0`), fly inside the housing and land again (`flight`). `false`
     /// keeps the bilateral track of the paper (the ball is held on its circle by any force),
     /// bit-identical to the rolling model. Only scenes whose type allows flight
     /// ([`crate::Scene::FLIGHT`]) read it. Default `true`.
@@ -75,7 +75,7 @@ pub struct BallParams<T> {
     pub landing_restitution: T,
     /// Shortest flight a bounce may start \[s\]: a landing whose rebound would fly for less
     /// (`2 e_n v_n / a_p`, pressed onto the track at `a_p`) is a rolling landing
-    /// ([`crate::flight::landing_bounces`]). 0 (the default) means the time step h, the
+    /// (`flight::landing_bounces`). 0 (the default) means the time step h, the
     /// shortest flight a step resolves: the number of bounces then grows as h shrinks (a
     /// bouncing ball's rebounds shorten geometrically). A fixed time makes the cut the same
     /// for every step not longer than it (3 ms: rebounds lower than about 10 µm at 1 g roll
@@ -160,16 +160,16 @@ pub struct Integrator<T> {
     /// Where a stop impact of the rolling ball inside a step is put (the flight events, the
     /// ball leaving and landing on the track, always split the step at their crossing).
     pub events: EventLocation,
-    /// Hard cap on the work of one step, in work units ([`crate::newton::work`]: an assembly
+    /// Hard cap on the work of one step, in work units ([`crate::work`]: an assembly
     /// with its factorization 16, a residual 5, a back-substitution 1), summed over every
     /// solve of the step: the Newmark solve, an event's sub-steps, impulses and consistent
     /// accelerations, the damping trials. A solve that reaches it stops with its iterate and
     /// the step is flagged ([`crate::Outcome::Capped`]); repeated capped or failed steps make
     /// the model restart itself ([`crate::Model::step`]). Default
-    /// [`work::UNLIMITED`](crate::newton::work::UNLIMITED) (the iteration limits alone);
+    /// [`work::UNLIMITED`](crate::work::UNLIMITED) (the iteration limits alone);
     /// firmware with a deadline per sample sets it with `events` (`docs/embedded.md`). At
-    /// least [`work::MIN_CAP`](crate::newton::work::MIN_CAP), at most
-    /// [`work::UNLIMITED`](crate::newton::work::UNLIMITED) (a step's time stays bounded).
+    /// least [`work::MIN_CAP`](crate::work::MIN_CAP), at most
+    /// [`work::UNLIMITED`](crate::work::UNLIMITED) (a step's time stays bounded).
     pub max_work: u32,
     /// What a step whose Newton solve stopped at the work cap does ([`AtCap`]; default
     /// `Take`: measured in `docs/accuracy.md`, "The work cap").
@@ -240,7 +240,7 @@ impl<T: Real> Integrator<T> {
     }
 }
 
-/// Newton variant of the step solve (all converge to the same tolerance; `crate::newton`
+/// Newton variant of the step solve (all converge to the same tolerance; `step::newton`
 /// states the rule).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NewtonKind {
@@ -255,7 +255,7 @@ pub enum NewtonKind {
     /// Modified Newton: the factored Jacobian is kept across iterations and steps and rebuilt
     /// only when an iteration contracts by less than half, or the step length or the ball's
     /// contact changes, and at once in a step that starts with the ball in flight (where the
-    /// landings are, `crate::newton`). Iterations then cost a residual (no dual numbers, no axial tangent)
+    /// landings are, `step::newton`). Iterations then cost a residual (no dual numbers, no axial tangent)
     /// and a triangular solve. Convergence is linear but fast, because the Newton matrix
     /// `M + γhC + βh²K` changes little from step to step.
     Modified,
@@ -390,7 +390,7 @@ impl<T: Real> Default for Params<T> {
                 newton: NewtonKind::PerStep,
                 accept_after_budget: false,
                 events: EventLocation::Crossing,
-                max_work: crate::newton::work::UNLIMITED,
+                max_work: crate::work::UNLIMITED,
                 at_cap: AtCap::Take,
             },
             damping: Damping {
@@ -559,14 +559,14 @@ impl<T: Real> Params<T> {
                 reason: "must be at least 1",
             });
         }
-        if i.max_work < crate::newton::work::MIN_CAP {
+        if i.max_work < crate::work::MIN_CAP {
             return Err(Error::InvalidParameter {
                 field: "integrator.max_work",
                 reason:
                     "must afford the event tests, one refreshed Newton iteration and the reserve (24 units)",
             });
         }
-        if i.max_work > crate::newton::work::UNLIMITED {
+        if i.max_work > crate::work::UNLIMITED {
             return Err(Error::InvalidParameter {
                 field: "integrator.max_work",
                 reason: "must be at most 50,000 units (`work::UNLIMITED`, the default: the work the iteration limits allow); more would leave a step unbounded in time",
@@ -679,64 +679,4 @@ impl<T: Real> Calibration<T> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Every field name the checks of this file can report has its value in
-    /// [`Params::value_of`] (the names are read from the checks' source, so a new check with a
-    /// name missing from the table fails here).
-    #[test]
-    fn every_checked_field_has_its_value() {
-        let src = include_str!("params.rs");
-        let checks = &src[..src
-            .find("impl<T: Real> Params<T> {\n    /// The value of")
-            .unwrap()];
-        let p = Params::<f64>::default();
-        let mut names = 0;
-        for (i, _) in checks.match_indices('"') {
-            let rest = &checks[i + 1..];
-            let Some(end) = rest.find('"') else { break };
-            let name = &rest[..end];
-            let before = checks[..i].trim_end();
-            let is_field = before.ends_with("field:") || rest[end + 1..].starts_with(')');
-            if is_field && name.contains('.') || name == "gravity" {
-                assert!(
-                    p.value_of(name).is_some(),
-                    "`{name}` has no value in `value_of`"
-                );
-                names += 1;
-            }
-        }
-        assert!(names >= 33, "{names} names found");
-        assert_eq!(p.value_of("elements"), None);
-    }
-
-    /// A rejected parameter's value is the one that was set, NaN and counts included.
-    #[test]
-    fn value_of_a_rejected_field_is_the_value_set() {
-        type Set = fn(&mut Params<f32>);
-        let cases: [(Set, f32); 6] = [
-            (|p| p.beam.modulus = -2.5e9, -2.5e9),
-            (
-                |p| {
-                    p.ball.radius = 0.02;
-                    p.ball.track_radius = 0.01;
-                },
-                0.01,
-            ),
-            (|p| p.ball.initial_angle = 3.0, 3.0),
-            (|p| p.integrator.tolerance = 1e-9, 1e-9),
-            (|p| p.integrator.max_iterations = 0, 0.0),
-            (|p| p.gravity = f32::NAN, f32::NAN),
-        ];
-        for (set, value) in cases {
-            let mut p = Params::<f32>::default();
-            set(&mut p);
-            let Err(Error::InvalidParameter { field, .. }) = p.validate(true, true) else {
-                panic!("accepted: {value}");
-            };
-            let v = p.value_of(field).unwrap();
-            assert!(v == value || v.is_nan() && value.is_nan(), "{field}: {v}");
-        }
-    }
-}
+mod tests;

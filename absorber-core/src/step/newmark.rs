@@ -1,6 +1,6 @@
 //! Newmark's method (paper §4, eqs. 29–31) and its generalization, the generalized-α scheme
 //! (Chung & Hulbert 1993, in the form of Arnold & Brüls 2007): predictor, and the corrector
-//! solved for the new acceleration by Newton ([`crate::newton`]).
+//! solved for the new acceleration by Newton ([`crate::step::newton`]).
 //!
 //! With `x = q̈_{n+1}` the unknown and `a` the acceleration-like variable of the scheme
 //! (`a = q̈` for Newmark):
@@ -13,61 +13,15 @@
 //! Newmark's method (`α_m = α_f = 0`: `b = 0`, `κ = 1`; that path never touches `b`).
 
 use crate::error::Error;
-use crate::model::{State, StepReport};
-use crate::newton::{Solved, Workspace};
-use crate::params::{Integrator, NewtonKind};
+use crate::params::NewtonKind;
 use crate::scalar::{lit, Real};
 use crate::scene::Scene;
-use crate::system::{Problem, System};
-use crate::tip::Chain;
+use crate::state::{State, StepReport};
+use crate::step::newton::{Solved, Workspace};
+use crate::step::scheme::AlphaRecursion;
+use crate::step::scheme::Chain;
+use crate::step::system::{Problem, System};
 use nalgebra::SVector;
-
-/// Constants of the generalized-α recursion `a_{n+1} = from_accel q̈_n + from_pseudo a_n +
-/// ratio q̈_{n+1}`, computed once from the parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AlphaRecursion<T> {
-    /// `α_f / (1 − α_m)`.
-    pub from_accel: T,
-    /// `−α_m / (1 − α_m)`.
-    pub from_pseudo: T,
-    /// `κ = (1 − α_f) / (1 − α_m)`.
-    pub ratio: T,
-}
-
-impl<T: Real> AlphaRecursion<T> {
-    /// The constants of `integrator`, or `None` for Newmark's method.
-    pub fn of(integrator: &Integrator<T>) -> Option<Self> {
-        if integrator.is_newmark() {
-            return None;
-        }
-        let one = T::one();
-        let d = one - integrator.alpha_m;
-        Some(Self {
-            from_accel: integrator.alpha_f / d,
-            from_pseudo: -integrator.alpha_m / d,
-            ratio: (one - integrator.alpha_f) / d,
-        })
-    }
-
-    /// The Newton chain of a step of length `h`: `(c_q, c_v, c_m) = (κβh², κγh, 1)` with the
-    /// recursion `alpha` (`κ = 1` for Newmark, `None`). The one formula of the core and the
-    /// full solver.
-    pub fn chain(integrator: &Integrator<T>, alpha: Option<&Self>, h: T) -> Chain<T> {
-        let (c_q, c_v) = (integrator.beta * h * h, integrator.gamma * h);
-        match alpha {
-            None => Chain {
-                c_q,
-                c_v,
-                c_m: T::one(),
-            },
-            Some(g) => Chain {
-                c_q: c_q * g.ratio,
-                c_v: c_v * g.ratio,
-                c_m: T::one(),
-            },
-        }
-    }
-}
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     /// The Newton chain of a step of length `h`: `(c_q, c_v, c_m) = (κβh², κγh, 1)` (`κ = 1`
@@ -216,8 +170,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             None => out.pseudo_accel = *a,
         }
         match out.contact {
-            crate::model::Contact::OnStop(side) => self.hold_on_stop(out, side),
-            crate::model::Contact::InFlight if S::FLIGHT => {
+            crate::state::Contact::OnStop(side) => self.hold_on_stop(out, side),
+            crate::state::Contact::InFlight if S::FLIGHT => {
                 out.flight = self.fly(&s.flight, h, self.effective_gravity(base_accel));
             }
             _ => {}

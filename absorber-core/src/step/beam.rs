@@ -13,10 +13,10 @@
 //! assembly works on those (half the products of the 8×8 forms) and writes straight into the
 //! system's residual and Newton matrix (no element matrix is built on the step path).
 
-use crate::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector, TangentBlocks};
-use crate::linalg::BandMatrix;
 use crate::scalar::Real;
-use crate::tip::Chain;
+use crate::step::ancf::{AxialQuadrature, Element, ElementMatrix, ElementVector, TangentBlocks};
+use crate::step::linalg::BandMatrix;
+use crate::step::scheme::Chain;
 use nalgebra::SVector;
 
 /// Precomputed data of the uniform beam.

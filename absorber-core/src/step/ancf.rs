@@ -321,7 +321,7 @@ impl<T: Real> Element<T> {
     }
 
     /// [`Element::bending_energy`] with `K_t` given: `stiffness` must be this element's
-    /// [`Element::bending_stiffness`], computed once (as [`crate::beam::Beam`] keeps it) instead
+    /// [`Element::bending_stiffness`], computed once (as [`crate::step::beam::Beam`] keeps it) instead
     /// of at every call. Same result bit for bit.
     pub fn bending_energy_with(stiffness: &ElementMatrix<T>, u: &ElementVector<T>) -> T {
         lit::<T>(0.5) * u.dot(&(stiffness * u))

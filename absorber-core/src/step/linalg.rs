@@ -29,7 +29,7 @@
 //! `tests/work_cap.rs` holds that count, so a change that makes it run must say so here). Under
 //! a work cap ([`crate::Integrator::max_work`]) it never
 //! runs: its dense LU grows as D³ and is outside the cap's bound, so the solve stops at the
-//! cap instead ([`crate::newton`]).
+//! cap instead ([`crate::step::newton`]).
 //!
 //! The band is stored by rows ([`BandMatrix`]) and factored in place; the dense fallback uses
 //! nalgebra's column-major `SMatrix`. Inner loops run over fixed windows through iterators, so
@@ -53,6 +53,7 @@ pub const WIDTH: usize = 2 * BAND + 1;
 pub const NODE: usize = 4;
 
 /// Whether `J[i,j]` lies in the node envelope (module doc).
+#[cfg(test)]
 pub fn in_envelope(i: usize, j: usize) -> bool {
     (i / NODE).abs_diff(j / NODE) <= 1
 }
@@ -125,6 +126,7 @@ impl<T: Real, const D: usize> BandMatrix<T, D> {
     }
 
     /// The same matrix, dense (modes and tests).
+    #[allow(clippy::wrong_self_convention)] // by reference: no matrix by value in the core
     pub fn to_dense(&self) -> SMatrix<T, D, D> {
         let mut m = SMatrix::<T, D, D>::zeros();
         self.write_dense(&mut m);
@@ -570,7 +572,8 @@ pub fn solve<T: Real, const D: usize>(
     x.iter().all(|v| v.is_finite())
 }
 
-/// Solves `A x = b` with a copy of `A` (off the step path: modes, tests); `None` if singular.
+/// Solves `A x = b` with a copy of `A` (off the step path: tests); `None` if singular.
+#[cfg(test)]
 pub fn solve_dense<T: Real, const D: usize>(
     mut a: SMatrix<T, D, D>,
     mut b: SVector<T, D>,

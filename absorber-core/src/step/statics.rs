@@ -1,13 +1,14 @@
 //! Static equilibrium under gravity, consistent accelerations, and the start of a run.
 
 use crate::error::Error;
-use crate::model::{Contact, State, END_BEYOND_STOP, START_BEYOND_STOP};
-use crate::newton::{Solved, Workspace};
+use crate::error::{END_BEYOND_STOP, START_BEYOND_STOP};
 use crate::params::NewtonKind;
 use crate::scalar::{lit, to_f64, Real};
 use crate::scene::Scene;
-use crate::system::{Problem, System};
-use crate::tip::Chain;
+use crate::state::{Contact, State};
+use crate::step::newton::{Solved, Workspace};
+use crate::step::scheme::Chain;
+use crate::step::system::{Problem, System};
 use nalgebra::SVector;
 
 impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
@@ -86,7 +87,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
 
     /// Solves `r(q, v, a) = 0` for the acceleration at fixed q, v (linear in a; with exact
     /// factors two iterations, the second confirming). Within a step it may reuse the step's
-    /// factors ([`crate::newton`]).
+    /// factors ([`crate::step::newton`]).
     pub(crate) fn consistent_acceleration(
         &self,
         s: &State<T, D>,
@@ -141,7 +142,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             steps: 0,
             base_accel,
             contact: Contact::Off,
-            flight: crate::flight::Flight::zero(),
+            flight: crate::state::Flight::zero(),
         };
         // What the start's acceleration leaves out: a(q, 0), the equilibrium's own (at rest,
         // without input or offset), at the start from the equilibrium; else nothing.

@@ -1,23 +1,24 @@
 //! The equations of motion of a scene: residual `r(q, q̇, q̈)` and Newton matrix, assembled from
-//! the beam ([`crate::beam`]) and the tip body and ball ([`crate::tip`]).
+//! the beam ([`crate::step::beam`]) and the tip body and ball ([`crate::step::tip`]).
 //!
 //! [`System`] holds everything that stays fixed during a run (parameters, the beam's
 //! precomputed element data, the tip inertia, the static equilibrium, the unknowns' scales);
 //! the step path borrows it immutably next to the Newton workspace
-//! ([`crate::newton::Workspace`]) and the state.
+//! ([`crate::step::newton::Workspace`]) and the state.
 
-use crate::ancf::TangentBlocks;
-use crate::beam::Beam;
-use crate::dual::Plain;
 use crate::error::Error;
-use crate::linalg::{BandMatrix, PIVOT_RATIO};
 use crate::loads::SceneData;
-use crate::model::{Contact, State};
-use crate::newton::MAX_STEP;
 use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::{BallKind, Scene};
-use crate::tip::{self, BallMode, Chain, LocalState, TipInertia, D5, LOCAL};
+use crate::state::{Contact, State};
+use crate::step::ancf::TangentBlocks;
+use crate::step::beam::Beam;
+use crate::step::convergence::MAX_STEP;
+use crate::step::dual::Plain;
+use crate::step::linalg::{BandMatrix, PIVOT_RATIO};
+use crate::step::scheme::Chain;
+use crate::step::tip::{self, BallMode, LocalState, TipInertia, D5, LOCAL};
 use core::marker::PhantomData;
 use nalgebra::{SMatrix, SVector};
 
@@ -37,13 +38,13 @@ pub struct System<T: Real, S: Scene, const N: usize, const D: usize> {
     pub(crate) pivot_ratio: T,
     pub(crate) max_step: T,
     /// What a reused matrix's estimated remaining error must be below:
-    /// `max(SETTLE · tolerance, 8ε)` ([`crate::newton::SETTLE`]; not below the rounding floor
+    /// `max(SETTLE · tolerance, 8ε)` ([`crate::step::convergence::SETTLE`]; not below the rounding floor
     /// of the precision, which `f32` reaches first: 9.5e-7).
     pub(crate) settle: T,
-    /// [`crate::newton::SLOW`] in the scalar.
+    /// [`crate::step::convergence::SLOW`] in the scalar.
     pub(crate) slow: T,
     /// The generalized-α recursion's constants (`None`: Newmark).
-    pub(crate) alpha: Option<crate::newmark::AlphaRecursion<T>>,
+    pub(crate) alpha: Option<crate::step::scheme::AlphaRecursion<T>>,
     /// What the scene adds: loads, per-element sections (`()` for the paper's scenes).
     pub(crate) data: S::Data<T, N>,
     /// Where a restart puts the model (computed with the static equilibrium).
@@ -111,7 +112,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
     pub(crate) fn new(params: Params<T>) -> Self {
         let b = &params.beam;
         // The calibration's factors are folded in here, once (the step never sees them).
-        let element = crate::ancf::Element::of_beam(b, &params.calibration, N);
+        let element = crate::step::ancf::Element::of_beam(b, &params.calibration, N);
         let mut scale = SVector::<T, D>::from_element(T::one());
         for node in 0..N {
             for c in 0..2 {
@@ -136,7 +137,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
             pivot_ratio: lit(PIVOT_RATIO),
             max_step: lit(MAX_STEP),
             settle: {
-                let want = lit::<T>(crate::newton::SETTLE) * params.integrator.tolerance;
+                let want = lit::<T>(crate::step::convergence::SETTLE) * params.integrator.tolerance;
                 let floor = T::default_epsilon() * lit(8.0);
                 if want > floor {
                     want
@@ -144,8 +145,8 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
                     floor
                 }
             },
-            slow: lit(crate::newton::SLOW),
-            alpha: crate::newmark::AlphaRecursion::of(&params.integrator),
+            slow: lit(crate::step::convergence::SLOW),
+            alpha: crate::step::scheme::AlphaRecursion::of(&params.integrator),
             rest: Rest {
                 q: SVector::zeros(),
                 a0: SVector::zeros(),
@@ -389,7 +390,7 @@ impl<T: Real, S: Scene, const N: usize, const D: usize> System<T, S, N, D> {
         &self,
         k: usize,
         g_eff: T,
-    ) -> (&Beam<T>, crate::ancf::ElementVector<T>) {
+    ) -> (&Beam<T>, crate::step::ancf::ElementVector<T>) {
         let (b, mut applied) = match self.data.sections().and_then(|s| s.get(k)) {
             Some(sec) => (&sec.beam, sec.weight(g_eff)),
             None => (&self.beam, self.beam.element.gravity_force(g_eff)),

@@ -29,10 +29,11 @@
 //! Everything is evaluated in [`Dual`] arithmetic seeded with the Newmark chain coefficients,
 //! so one pass gives the residual and its exact Jacobian `c_m ∂r/∂ä + c_v ∂r/∂ȧ + c_q ∂r/∂q`.
 
-use crate::dual::{Dual, Number, Plain};
 use crate::params::Params;
 use crate::scalar::{lit, Real};
 use crate::scene::BallKind;
+use crate::step::dual::{Dual, Number, Plain};
+use crate::step::scheme::Chain;
 
 /// Local coordinates: end-node displacement (x, y), slope displacement (x, y), ball spin φ.
 pub const LOCAL: usize = 5;
@@ -49,7 +50,7 @@ pub enum BallMode<T> {
     /// Ball free: its spin φ is an unknown.
     Free,
     /// Ball in flight: gone from the housing (the tip rows use the tip body's inertia alone)
-    /// and its spin φ torque-free, row 4 = φ̈ ([`crate::flight`]).
+    /// and its spin φ torque-free, row 4 = φ̈ (`step::flight`).
     Flying,
     /// Static solve of a free ball: φ is an unknown pinned by row 4 to the plumb position
     /// θ = 0 (an equilibrium for any gravity, the only stable one for g > 0; with g = 0 the
@@ -123,18 +124,6 @@ pub struct LocalState<T> {
     pub v: [T; LOCAL],
     /// Accelerations.
     pub a: [T; LOCAL],
-}
-
-/// Newmark chain coefficients of the unknown `x`: `q = q₀ + c_q x`, `v = v₀ + c_v x`,
-/// `a = a₀ + c_m x`.
-#[derive(Clone, Copy, Debug)]
-pub struct Chain<T> {
-    /// ∂q/∂x.
-    pub c_q: T,
-    /// ∂v/∂x.
-    pub c_v: T,
-    /// ∂a/∂x.
-    pub c_m: T,
 }
 
 /// Tip rotation kinematics: ψ, ψ̇, ψ̈, its gradient j and (cos ψ, sin ψ) = (a₃, a₄)/|a|
@@ -251,7 +240,7 @@ pub fn gap_gradient<T: Real>(inertia: &TipInertia<T>, x: &LocalState<T>) -> [T; 
 }
 
 /// Residual rows of the tip body and ball on the local coordinates, with their Jacobian when
-/// `A` is a [`Dual`] (plain values with [`Plain`]).
+/// `A` is a `Dual` (plain values with `Plain`).
 ///
 /// Returns the five rows (value = generalized force, for duals `du[k]` = Jacobian entry along
 /// local direction k) and the value of `E_θ` (the generalized contact force the housing or stop

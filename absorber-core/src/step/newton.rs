@@ -41,89 +41,15 @@
 //! had never been offered.
 
 use crate::error::Error;
-use crate::linalg::{self, BandMatrix};
-use crate::model::Contact;
 use crate::params::NewtonKind;
 use crate::scalar::{is_positive, lit, to_f64, Real};
 use crate::scene::Scene;
-use crate::system::{Problem, System};
+use crate::state::Contact;
+use crate::step::convergence::{DAMPING_TRIALS, KEPT_ITERATIONS};
+use crate::step::linalg::{self, BandMatrix};
+use crate::step::system::{Problem, System};
+use crate::work;
 use nalgebra::{SMatrix, SVector};
-
-/// Trust radius of a Newton correction, in units of the beam length for positions and in
-/// radians for slopes and angles: a correction beyond it is damped ([`damping`]), never
-/// below it. A linearization about a state with a large (transient) axial force can be nearly
-/// singular in bending, and its raw correction would leave the physical range.
-pub const MAX_STEP: f64 = 0.05;
-
-/// Most damping factors tried per Newton iteration (λ = 1, ½, …, 1/2048), each one residual and one
-/// back-substitution: the work per iteration stays bounded.
-pub const DAMPING_TRIALS: u32 = 12;
-
-/// A reused matrix's iteration is converged when its estimated remaining error
-/// `θ/(1−θ)‖dx‖` is below `SETTLE · tolerance` (but not below `8ε`, the rounding floor of the
-/// scalar), and `‖dx‖` below the tolerance.
-pub const SETTLE: f64 = 1e-4;
-
-/// A reused matrix whose correction contracted by less than this factor is refreshed at the
-/// next iteration (the correction itself is taken when it contracts by half).
-pub const SLOW: f64 = 0.25;
-
-/// Most iterations a Newton solve gives the factors kept from an earlier step (modified
-/// Newton): a solve that has not converged after this many refreshes at the next iteration.
-/// Why: near the rounding floor of `f32` (the settled test asks for `8ε` there) a kept matrix's
-/// corrections stop contracting steadily (θ = 0.13, 0.20, 0.23, 0.19, 0.31 in the paper run's
-/// hardest step), and each further reused iteration costs [`work::RESIDUAL`] +
-/// [`work::SOLVE`] = 6 units against a refresh's 17, which converges at once from there. Five
-/// reused iterations (30 units, the correction contracted by about 0.2⁵ ≈ 3e-4) bound a
-/// rolling step at 47 units: the paper run's hardest step took six and a refresh, 53
-/// (`docs/embedded.md`, "Firmware defaults"). Factors built in the same step (every
-/// `PerStep` reuse) are not limited.
-pub const KEPT_ITERATIONS: u32 = 5;
-
-/// Work units of the operations a step is made of ([`crate::Integrator::max_work`] caps their
-/// sum per step). The weights follow the operations' measured costs on a Cortex-M4F, each with
-/// the Newton iteration's own code around it (free ball, N = 3, `f32`: a back-substitution 468
-/// instructions, a residual 1,846 and about 400 for the iteration, an assembly with its banded
-/// factorization 6,992 and the same 400; `docs/embedded.md`), so that one unit is about 460
-/// instructions whatever the operation.
-pub mod work {
-    /// A back-substitution with the current factors.
-    pub const SOLVE: u32 = 1;
-    /// A residual of the equations of motion (a reused matrix's iteration, a damping trial).
-    pub const RESIDUAL: u32 = 5;
-    /// An assembly of the residual and the Newton matrix, and its banded factorization.
-    pub const REFRESH: u32 = 16;
-    /// The pivoting fallback on top of a refresh: the assembly again and the dense LU with
-    /// partial pivoting (`crate::linalg`). Only without a cap ([`UNLIMITED`]): under a cap a
-    /// matrix the banded LU refuses stops the solve at the cap instead.
-    pub const FALLBACK: u32 = 32;
-    /// Units the Newmark solves of a step leave to the events at its end: the back-substitutions
-    /// of a stop's and a landing's impulse in the trial's own factors (an event that needs a
-    /// matrix of its own, a plastic landing, charges it against the rest of the cap).
-    pub const RESERVE: u32 = 2 * SOLVE;
-    /// The event tests of a step that starts with the ball in flight (where the ball is
-    /// against the circle and the stops: square roots, arc tangents, cubic roots), charged
-    /// before the step's solves: about 1,900 instructions on the M4F.
-    pub const FLIGHT_TESTS: u32 = 4;
-    /// Units a split at an event's crossing needs beyond the trial step (a sub-step, the
-    /// impulse metric, the consistent acceleration and the rest of the step, each with a refresh
-    /// and a few iterations); a step that cannot afford it puts the event at its end.
-    pub const SPLIT: u32 = 4 * REFRESH + 8 * (RESIDUAL + SOLVE);
-    /// A restart of the model ([`crate::Model::step`], "Recovery": the failed step's state put
-    /// back, the start state with the input's consistent acceleration, about 1,300 instructions
-    /// on the M4F), reserved in advance: a step that restarts the model if it fails or is capped
-    /// runs with its cap lower by this much, so that the restart too stays within the cap.
-    pub const RESTART: u32 = 3;
-    /// The firmware's cap with events at the step end (`docs/embedded.md`): what the paper's
-    /// free ball needs in its hardest step, so that its input is never capped, and no more.
-    pub const DEADLINE: u32 = 48;
-    /// The smallest cap a model accepts: the event tests of a step ([`FLIGHT_TESTS`] or a
-    /// ball's release test, a residual), one refreshed Newton iteration and the reserve.
-    pub const MIN_CAP: u32 = RESIDUAL + REFRESH + SOLVE + RESERVE;
-    /// No cap (the default): about the work the iteration limits alone allowed before the cap
-    /// existed (five solves of 100 iterations with 12 damping trials each).
-    pub const UNLIMITED: u32 = 50_000;
-}
 
 /// What a factored matrix was built for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -165,7 +91,7 @@ pub struct Workspace<T, const D: usize> {
     /// A Newton solve of this step stopped at the cap.
     capped: bool,
     /// ... far from convergence: before any correction, or with a last correction above
-    /// [`crate::model::RESTART_INCREMENT`] tolerances (or an event had to wait).
+    /// [`crate::state::RESTART_INCREMENT`] tolerances (or an event had to wait).
     far: bool,
     /// Band factorizations of this step that fell back to pivoting.
     fallbacks: u32,
@@ -256,7 +182,7 @@ impl<T: Real, const D: usize> Workspace<T, D> {
     #[cold]
     fn stop_at_cap(&mut self, taken: bool, increment: T, tol: T) {
         self.capped = true;
-        let near = increment <= tol * lit(crate::model::RESTART_INCREMENT);
+        let near = increment <= tol * lit(crate::state::RESTART_INCREMENT);
         if !taken || !near {
             self.far = true;
         }
