@@ -23,35 +23,42 @@ pub struct StabilityArgs {
     pub jobs: Option<usize>,
 }
 
-/// Runs cases on `jobs` threads (each case in its own big-stack thread), in order.
+/// Runs cases on `jobs` threads (each case in its own big-stack thread), in order. Each worker
+/// keeps what it ran and hands it back when joined (a worker that panicked leaves its cases at
+/// their default outcome).
 pub fn run_all(
     cases: &[Case],
     jobs: usize,
     progress: impl Fn(&Case, &Outcome) + Sync,
 ) -> Vec<Outcome> {
     use std::sync::atomic::{AtomicUsize, Ordering};
-    use std::sync::Mutex;
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; cases.len()]);
+    let mut results: Vec<Option<Outcome>> = vec![None; cases.len()];
     std::thread::scope(|s| {
-        for _ in 0..jobs.max(1) {
-            s.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(c) = cases.get(i) else { break };
-                let o = run_case(c);
-                progress(c, &o);
-                if let Ok(mut r) = results.lock() {
-                    r[i] = Some(o);
+        let workers: Vec<_> = (0..jobs.max(1))
+            .map(|_| {
+                s.spawn(|| {
+                    let mut done = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(c) = cases.get(i) else { break };
+                        let o = run_case(c);
+                        progress(c, &o);
+                        done.push((i, o));
+                    }
+                    done
+                })
+            })
+            .collect();
+        for w in workers {
+            for (i, o) in w.join().unwrap_or_default() {
+                if let Some(r) = results.get_mut(i) {
+                    *r = Some(o);
                 }
-            });
+            }
         }
     });
-    results
-        .into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .map(Option::unwrap_or_default)
-        .collect()
+    results.into_iter().map(Option::unwrap_or_default).collect()
 }
 
 /// The command.
